@@ -1,0 +1,497 @@
+//! Settings of the tracker, with the paper's presets and validation.
+
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+
+/// Motion thresholds `(εd, εa)` of one error-correction level: `comp()` asks for a
+/// correction when the accumulated motion exceeds either (section 3.2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReferenceLevel {
+    /// εd: translation threshold in metres.
+    pub max_distance_m: f64,
+    /// εa: rotation threshold in degrees.
+    pub max_angle_deg: f64,
+}
+
+impl ReferenceLevel {
+    /// A level from millimetres and degrees, as the paper writes them.
+    pub const fn mm_deg(mm: f64, deg: f64) -> Self {
+        ReferenceLevel {
+            max_distance_m: mm / 1000.0,
+            max_angle_deg: deg,
+        }
+    }
+}
+
+/// Which error-correction levels run: the columns of the paper's Table 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// Plain frame-to-frame tracking, no reference frames.
+    Naive,
+    /// Level-one error correction only.
+    L1,
+    /// Level-one and level-two error correction.
+    L2,
+}
+
+impl std::str::FromStr for Mode {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "naive" => Ok(Mode::Naive),
+            "l1" => Ok(Mode::L1),
+            "l2" => Ok(Mode::L2),
+            _ => Err(Error::InvalidConfig {
+                field: "mode",
+                why: format!("`{s}` is not naive, l1 or l2"),
+            }),
+        }
+    }
+}
+
+/// Which thresholds and filter angles to start from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Preset {
+    /// The paper's PC values (Table 1): L1 (30 mm, 7°), L2 (120 mm, 12°), εn 28°, εg 7°.
+    Pc,
+    /// The paper's phone values (Table 2): L1 (30 mm, 3°), L2 (70 mm, 7°), εn 45°, εg 20°.
+    Phone,
+}
+
+impl std::str::FromStr for Preset {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "pc" => Ok(Preset::Pc),
+            "phone" => Ok(Preset::Phone),
+            _ => Err(Error::InvalidConfig {
+                field: "preset",
+                why: format!("`{s}` is not pc or phone"),
+            }),
+        }
+    }
+}
+
+/// Edge-preserving smoothing of depth over valid pixels only.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BilateralConfig {
+    /// Window radius in pixels (the window is `2r+1` square).
+    pub radius: usize,
+    /// Spatial standard deviation in pixels.
+    pub sigma_space_px: f32,
+    /// Range standard deviation as a fraction of the centre depth (noise grows with depth).
+    pub sigma_depth_rel: f32,
+}
+
+impl Default for BilateralConfig {
+    fn default() -> Self {
+        BilateralConfig {
+            radius: 2,
+            sigma_space_px: 1.5,
+            sigma_depth_rel: 0.02,
+        }
+    }
+}
+
+/// Frame preparation: the filter stage of the paper (section 4.2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilterConfig {
+    /// Bilateral filter on depth; `None` switches it off.
+    pub bilateral: Option<BilateralConfig>,
+    /// εn: drop a pixel whose axis and diagonal normals differ by more than this
+    /// angle (degrees); `None` switches the normal filter off.
+    pub normal_max_angle_deg: Option<f64>,
+    /// εg: drop the 3x3 neighbourhood where the surface is within this angle
+    /// (degrees) of the viewing ray; `None` switches the contour filter off.
+    pub contour_angle_deg: Option<f64>,
+    /// Depths below this (metres) are treated as missing.
+    pub min_depth_m: f64,
+    /// Depths above this (metres) are treated as missing.
+    pub max_depth_m: f64,
+}
+
+/// One step of the coarse-to-fine schedule.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MotionLevel {
+    /// Image pyramid level the residuals are computed on (0 = full resolution,
+    /// each level halves width and height by 2x2 averaging).
+    pub pyramid_level: usize,
+    /// Use every `stride`-th pixel of that level in each direction (the paper
+    /// samples every 8th, 4th and 2nd pixel of the full image).
+    pub stride: usize,
+    /// At most this many Gauss-Newton iterations at this step.
+    pub max_iterations: u32,
+}
+
+/// The coarse-to-fine schedules the engine knows by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Schedule {
+    /// The paper's: every 8th, 4th, then 2nd pixel of the full-resolution image.
+    PaperSampling,
+    /// A 2x2-averaged image pyramid, coarsest first, down to full resolution.
+    Pyramid,
+}
+
+impl Schedule {
+    /// The steps of this schedule.
+    pub fn levels(self) -> Vec<MotionLevel> {
+        let l = |pyramid_level, stride, max_iterations| MotionLevel {
+            pyramid_level,
+            stride,
+            max_iterations,
+        };
+        match self {
+            Schedule::PaperSampling => vec![l(0, 8, 20), l(0, 4, 15), l(0, 2, 10)],
+            Schedule::Pyramid => vec![l(3, 1, 20), l(2, 1, 15), l(1, 1, 10), l(0, 1, 8)],
+        }
+    }
+}
+
+/// Settings of `MOTION(Fi, Fj, Tinit)`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MotionConfig {
+    /// λ: gain of the depth residual relative to the intensity residual (intensity in
+    /// [0, 1], depth in metres).
+    pub depth_gain: f64,
+    /// ν: degrees of freedom of the t-distribution that weights residuals.
+    pub t_dof: f64,
+    /// The coarse-to-fine steps, coarsest first.
+    pub levels: Vec<MotionLevel>,
+    /// Stop a level when the update's translation (m) and rotation (rad) are both
+    /// below this.
+    pub min_update: f64,
+    /// A result with fewer valid residuals than this at the finest level failed.
+    pub min_valid_pixels: usize,
+    /// A result moving more than this between the two frames (metres) failed.
+    pub max_translation_m: f64,
+    /// A result rotating more than this between the two frames (degrees) failed.
+    pub max_rotation_deg: f64,
+}
+
+/// Everything the tracker needs to know.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Config {
+    /// Intrinsics and depth units of the stream.
+    pub camera: Camera,
+    /// Frame preparation.
+    pub filter: FilterConfig,
+    /// Motion estimation.
+    pub motion: MotionConfig,
+    /// Error-correction levels, level one first; empty for naive tracking.
+    pub reference_levels: Vec<ReferenceLevel>,
+    /// After this many consecutive lost frames the tracker re-anchors on the next
+    /// frame at the last good pose instead of insisting on the old frames.
+    pub max_lost_frames: u32,
+}
+
+impl Config {
+    /// The paper's settings for a preset and a mode on the given camera.
+    pub fn new(camera: Camera, preset: Preset, mode: Mode) -> Self {
+        let (levels, normal, contour) = match preset {
+            Preset::Pc => (
+                [
+                    ReferenceLevel::mm_deg(30.0, 7.0),
+                    ReferenceLevel::mm_deg(120.0, 12.0),
+                ],
+                28.0,
+                7.0,
+            ),
+            Preset::Phone => (
+                [
+                    ReferenceLevel::mm_deg(30.0, 3.0),
+                    ReferenceLevel::mm_deg(70.0, 7.0),
+                ],
+                45.0,
+                20.0,
+            ),
+        };
+        let used = match mode {
+            Mode::Naive => 0,
+            Mode::L1 => 1,
+            Mode::L2 => 2,
+        };
+        Config {
+            camera,
+            filter: FilterConfig {
+                bilateral: Some(BilateralConfig::default()),
+                normal_max_angle_deg: Some(normal),
+                contour_angle_deg: Some(contour),
+                min_depth_m: 0.1,
+                max_depth_m: 8.0,
+            },
+            motion: MotionConfig {
+                depth_gain: 1.8,
+                t_dof: 5.0,
+                levels: Schedule::Pyramid.levels(),
+                min_update: 1e-6,
+                min_valid_pixels: 200,
+                max_translation_m: 0.5,
+                max_rotation_deg: 45.0,
+            },
+            reference_levels: levels[..used].to_vec(),
+            max_lost_frames: 10,
+        }
+    }
+
+    /// Checks every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |field: &'static str, why: String| Err(Error::InvalidConfig { field, why });
+        self.camera.validate()?;
+        let f = &self.filter;
+        if let Some(b) = f.bilateral {
+            if b.radius == 0 || b.radius > 8 {
+                return bad(
+                    "filter.bilateral.radius",
+                    format!("{} is not in 1..=8", b.radius),
+                );
+            }
+            if !(b.sigma_space_px > 0.0 && b.sigma_space_px.is_finite()) {
+                return bad(
+                    "filter.bilateral.sigma_space_px",
+                    format!("{} is not positive", b.sigma_space_px),
+                );
+            }
+            if !(b.sigma_depth_rel > 0.0 && b.sigma_depth_rel.is_finite()) {
+                return bad(
+                    "filter.bilateral.sigma_depth_rel",
+                    format!("{} is not positive", b.sigma_depth_rel),
+                );
+            }
+        }
+        for (field, v) in [
+            ("filter.normal_max_angle_deg", f.normal_max_angle_deg),
+            ("filter.contour_angle_deg", f.contour_angle_deg),
+        ] {
+            if let Some(v) = v
+                && !(v > 0.0 && v < 90.0)
+            {
+                return bad(field, format!("{v} is not an angle in (0, 90) degrees"));
+            }
+        }
+        if !(f.min_depth_m >= 0.0 && f.max_depth_m > f.min_depth_m && f.max_depth_m.is_finite()) {
+            return bad(
+                "filter.min_depth_m/max_depth_m",
+                format!(
+                    "[{}, {}] is not a depth range",
+                    f.min_depth_m, f.max_depth_m
+                ),
+            );
+        }
+        let m = &self.motion;
+        if !(m.depth_gain >= 0.0 && m.depth_gain.is_finite()) {
+            return bad(
+                "motion.depth_gain",
+                format!("{} is not finite and non-negative", m.depth_gain),
+            );
+        }
+        if !(m.t_dof > 0.0 && m.t_dof.is_finite()) {
+            return bad("motion.t_dof", format!("{} is not positive", m.t_dof));
+        }
+        if m.levels.is_empty() {
+            return bad("motion.levels", "no coarse-to-fine level".into());
+        }
+        let mut w = self.camera.width;
+        let mut h = self.camera.height;
+        let deepest = m.levels.iter().map(|l| l.pyramid_level).max().unwrap_or(0);
+        for _ in 0..deepest {
+            w /= 2;
+            h /= 2;
+        }
+        if deepest > 6 || w < 8 || h < 8 {
+            return bad(
+                "motion.levels",
+                format!("pyramid level {deepest} leaves a {w}x{h} image"),
+            );
+        }
+        for l in &m.levels {
+            if l.stride == 0 || l.stride > 16 {
+                return bad(
+                    "motion.levels.stride",
+                    format!("{} is not in 1..=16", l.stride),
+                );
+            }
+            if l.max_iterations == 0 || l.max_iterations > 1000 {
+                return bad(
+                    "motion.levels.max_iterations",
+                    format!("{} is not in 1..=1000", l.max_iterations),
+                );
+            }
+        }
+        if !(m.min_update > 0.0 && m.min_update.is_finite()) {
+            return bad(
+                "motion.min_update",
+                format!("{} is not positive", m.min_update),
+            );
+        }
+        if !(m.max_translation_m > 0.0 && m.max_rotation_deg > 0.0) {
+            return bad(
+                "motion.max_translation_m/max_rotation_deg",
+                "must be positive".into(),
+            );
+        }
+        for l in &self.reference_levels {
+            if !(l.max_distance_m >= 0.0 && l.max_distance_m.is_finite()) {
+                return bad(
+                    "reference_levels.max_distance_m",
+                    format!("{} is not a distance", l.max_distance_m),
+                );
+            }
+            if !(l.max_angle_deg >= 0.0 && l.max_angle_deg < 180.0) {
+                return bad(
+                    "reference_levels.max_angle_deg",
+                    format!("{} is not in [0, 180)", l.max_angle_deg),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// Deepest pyramid level the schedule uses.
+    pub fn pyramid_depth(&self) -> usize {
+        self.motion
+            .levels
+            .iter()
+            .map(|l| l.pyramid_level)
+            .max()
+            .unwrap_or(0)
+    }
+}
+
+/// Parses reference levels written as `"30mm:7deg,120mm:12deg"` (metres with `m`,
+/// millimetres with `mm`, degrees with `deg`). An empty string means naive tracking.
+pub fn parse_levels(s: &str) -> Result<Vec<ReferenceLevel>> {
+    let bad = |why: String| Error::InvalidConfig {
+        field: "levels",
+        why,
+    };
+    let s = s.trim();
+    if s.is_empty() || s.eq_ignore_ascii_case("none") {
+        return Ok(Vec::new());
+    }
+    s.split(',')
+        .map(|pair| {
+            let (d, a) = pair
+                .split_once(':')
+                .ok_or_else(|| bad(format!("`{pair}` is not DISTANCE:ANGLE, e.g. 30mm:7deg")))?;
+            let d = d.trim();
+            let dist = if let Some(v) = d.strip_suffix("mm") {
+                v.trim().parse::<f64>().map(|x| x / 1000.0)
+            } else if let Some(v) = d.strip_suffix('m') {
+                v.trim().parse::<f64>()
+            } else {
+                return Err(bad(format!("distance `{d}` needs a unit, mm or m")));
+            }
+            .map_err(|e| bad(format!("distance `{d}`: {e}")))?;
+            let a = a.trim();
+            let ang = a
+                .strip_suffix("deg")
+                .ok_or_else(|| bad(format!("angle `{a}` needs the unit deg")))?
+                .trim()
+                .parse::<f64>()
+                .map_err(|e| bad(format!("angle `{a}`: {e}")))?;
+            if !(dist.is_finite() && dist >= 0.0 && ang.is_finite() && (0.0..180.0).contains(&ang))
+            {
+                return Err(bad(format!("`{pair}` is out of range")));
+            }
+            Ok(ReferenceLevel {
+                max_distance_m: dist,
+                max_angle_deg: ang,
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cam() -> Camera {
+        Camera {
+            width: 320,
+            height: 240,
+            fx: 258.65,
+            fy: 258.25,
+            cx: 159.05,
+            cy: 127.4,
+            depth_scale: 5000.0,
+        }
+    }
+
+    #[test]
+    fn presets_carry_the_papers_values() {
+        let pc = Config::new(cam(), Preset::Pc, Mode::L2);
+        assert_eq!(
+            pc.reference_levels,
+            vec![
+                ReferenceLevel::mm_deg(30.0, 7.0),
+                ReferenceLevel::mm_deg(120.0, 12.0)
+            ]
+        );
+        assert_eq!(pc.filter.normal_max_angle_deg, Some(28.0));
+        assert_eq!(pc.filter.contour_angle_deg, Some(7.0));
+        assert_eq!(pc.motion.depth_gain, 1.8);
+        let phone = Config::new(cam(), Preset::Phone, Mode::L1);
+        assert_eq!(
+            phone.reference_levels,
+            vec![ReferenceLevel::mm_deg(30.0, 3.0)]
+        );
+        assert_eq!(phone.filter.normal_max_angle_deg, Some(45.0));
+        assert_eq!(phone.filter.contour_angle_deg, Some(20.0));
+        assert!(
+            Config::new(cam(), Preset::Pc, Mode::Naive)
+                .reference_levels
+                .is_empty()
+        );
+        assert!(pc.validate().is_ok() && phone.validate().is_ok());
+    }
+
+    #[test]
+    fn validate_rejects_bad_fields() {
+        let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+        c.motion.depth_gain = f64::NAN;
+        assert!(matches!(
+            c.validate(),
+            Err(Error::InvalidConfig {
+                field: "motion.depth_gain",
+                ..
+            })
+        ));
+        let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+        c.motion.levels[0].pyramid_level = 6;
+        assert!(matches!(
+            c.validate(),
+            Err(Error::InvalidConfig {
+                field: "motion.levels",
+                ..
+            })
+        ));
+        let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+        c.filter.contour_angle_deg = Some(95.0);
+        assert!(matches!(
+            c.validate(),
+            Err(Error::InvalidConfig {
+                field: "filter.contour_angle_deg",
+                ..
+            })
+        ));
+    }
+
+    #[test]
+    fn levels_parse() {
+        let l = parse_levels("30mm:7deg,0.12m:12deg").unwrap();
+        assert_eq!(
+            l,
+            vec![
+                ReferenceLevel::mm_deg(30.0, 7.0),
+                ReferenceLevel {
+                    max_distance_m: 0.12,
+                    max_angle_deg: 12.0
+                }
+            ]
+        );
+        assert!(parse_levels("").unwrap().is_empty());
+        assert!(parse_levels("30:7").is_err());
+        assert!(parse_levels("30mm:7").is_err());
+        assert!(parse_levels("-3mm:7deg").is_err());
+    }
+}

@@ -1,0 +1,28 @@
+//! # ecvo-core
+//!
+//! The tracking engine of ecvo: An, Lee, Jeong, Ihm, "Tracking an RGB-D Camera on
+//! Mobile Devices Using an Improved Frame-to-Frame Pose Estimation Method"
+//! (WACV 2018). Frames in, poses out: no file I/O, no threads, no Java.
+//!
+//! - [`prepare`]: the filter stage (bilateral, normal-based and contour-based
+//!   depth removal) and the per-level images and template points.
+//! - [`motion`]: `MOTION(Fi, Fj, Tinit)`, dense photometric and depth alignment by
+//!   iteratively re-weighted Gauss-Newton with t-distribution weights.
+//! - [`tracker`]: adaptive multi-level pose error correction (Figure 1(b)).
+//! - [`se3`]: the exponential and logarithm of SE(3).
+
+pub mod camera;
+pub mod config;
+pub mod error;
+pub mod se3;
+
+pub use camera::{Camera, FrameView};
+pub use config::{
+    Config, FilterConfig, Mode, MotionConfig, MotionLevel, Preset, ReferenceLevel, Schedule,
+};
+pub use error::{Error, Result};
+pub use nalgebra;
+
+/// A rigid motion in double precision. Poses are camera-to-world; the world is the
+/// first camera.
+pub type Pose = nalgebra::Isometry3<f64>;
