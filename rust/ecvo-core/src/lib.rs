@@ -14,14 +14,20 @@
 pub mod camera;
 pub mod config;
 pub mod error;
+pub mod motion;
+pub mod prepare;
 pub mod se3;
+pub mod tracker;
 
 pub use camera::{Camera, FrameView};
 pub use config::{
     Config, FilterConfig, Mode, MotionConfig, MotionLevel, Preset, ReferenceLevel, Schedule,
 };
 pub use error::{Error, Result};
+pub use motion::{MotionEstimator, MotionResult};
 pub use nalgebra;
+pub use prepare::{PreparedFrame, Preparer};
+pub use tracker::{Counters, FrameOutput, Odometry, Tracker, TrackingState, comp};
 
 /// A rigid motion in double precision. Poses are camera-to-world; the world is the
 /// first camera.

@@ -67,6 +67,15 @@ pub fn angle(pose: &Isometry3<f64>) -> f64 {
     ((r.matrix().trace() - 1.0) * 0.5).clamp(-1.0, 1.0).acos()
 }
 
+/// `a * b` with the rotation renormalised: nalgebra's `UnitQuaternion` product
+/// does not renormalise, and the inverse is a conjugate, so rounding in long
+/// chains of `inverse() * pose` would otherwise grow exponentially.
+pub fn compose(a: &Isometry3<f64>, b: &Isometry3<f64>) -> Isometry3<f64> {
+    let mut p = a * b;
+    p.rotation.renormalize();
+    p
+}
+
 /// True when every component of the pose is finite.
 pub fn is_finite(pose: &Isometry3<f64>) -> bool {
     pose.translation.vector.iter().all(|x| x.is_finite())
@@ -138,6 +147,28 @@ mod tests {
         let v = Vector3::new(xi[0], xi[1], xi[2]);
         let w = Vector3::new(xi[3], xi[4], xi[5]);
         assert_relative_eq!(fd, v + w.cross(&p), epsilon = 1e-8);
+    }
+
+    #[test]
+    fn compose_keeps_rotations_unit_through_long_chains() {
+        let step = exp(&Twist::new(0.01, -0.02, 0.005, 0.013, -0.007, 0.021));
+        let mut reference = Isometry3::identity();
+        let mut pose = Isometry3::identity();
+        for i in 0..5000 {
+            pose = compose(&pose, &step);
+            if i % 7 == 0 {
+                let accumulated = compose(&reference.inverse(), &pose);
+                pose = compose(&reference, &accumulated);
+                reference = pose;
+            }
+        }
+        assert!((pose.rotation.quaternion().norm() - 1.0).abs() < 1e-12);
+        let r = pose.rotation.to_rotation_matrix();
+        assert_relative_eq!(
+            r.matrix() * r.matrix().transpose(),
+            Matrix3::identity(),
+            epsilon = 1e-12
+        );
     }
 
     #[test]

@@ -1,0 +1,498 @@
+//! `MOTION(Fi, Fj, Tinit)`: dense direct alignment of intensity and depth.
+//!
+//! Following Tykkälä et al. with the weighting of Kerl et al., as the paper does:
+//! every valid template point `q` of the reference frame `Fj` is moved into the
+//! current frame `Fi` by `T = T_{j→i}` and projected to `u' = π(T q)`; there
+//!
+//! - the photometric residual is `r_I = I_i(u') − I_j(q)` (intensities in [0, 1]),
+//! - the geometric residual is `r_Z = D_i(u') − [T q]_z` (metres), scaled by λ,
+//!
+//! and both share one weight from a bivariate t-distribution (ν = 5) on
+//! `e² = r_I² + λ² r_Z²`, whose scale is re-estimated every iteration. Gauss-Newton
+//! on a left perturbation `T ← exp(δ) T` runs coarse to fine; a step that raises the
+//! error is rejected and ends its level. The result reports `T_{i,j} = T⁻¹`, the
+//! motion that maps camera `i` coordinates into camera `j` coordinates.
+
+use nalgebra::{Matrix6, SymmetricEigen, Vector6};
+
+use crate::Pose;
+use crate::config::MotionConfig;
+use crate::prepare::{PreparedFrame, Sample};
+use crate::se3;
+
+/// The most coarse-to-fine steps a schedule may have.
+pub const MAX_STEPS: usize = 8;
+
+/// Why a motion estimate was rejected.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Failure {
+    /// Too few pixels of the reference frame landed on valid pixels of the current one.
+    TooFewPixels,
+    /// The normal equations are singular or nearly so (flat, featureless input).
+    Degenerate,
+    /// The estimate is not finite.
+    NotFinite,
+    /// The estimated motion is larger than a frame-to-frame motion can be.
+    TooLarge,
+}
+
+/// How the estimation ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Status {
+    /// The finest level converged (update below the threshold, or a rejected step).
+    Converged,
+    /// The finest level used all its iterations.
+    MaxIterations,
+    /// No usable estimate; the pose is the initial guess and must not be used.
+    Failed(Failure),
+}
+
+/// The outcome of one `MOTION` call.
+#[derive(Clone, Copy, Debug)]
+pub struct MotionResult {
+    /// `T_{i,j}`: maps points in camera `i` (current) coordinates to camera `j`
+    /// (reference) coordinates. Equal to the initial guess when the call failed.
+    pub pose: Pose,
+    /// Gauss-Newton iterations at each coarse-to-fine step (first `steps` entries).
+    pub iterations: [u32; MAX_STEPS],
+    /// Number of coarse-to-fine steps run.
+    pub steps: usize,
+    /// Final weighted mean squared residual `Σ w e² / n`.
+    pub error: f64,
+    /// Valid residuals at the finest step.
+    pub valid_pixels: usize,
+    /// `JᵀWJ` at the finest step: the information matrix of the twist `[v; ω]`.
+    pub information: Matrix6<f64>,
+    /// Converged, ran out of iterations, or failed.
+    pub status: Status,
+}
+
+impl MotionResult {
+    /// True unless the estimate failed.
+    pub fn is_ok(&self) -> bool {
+        !matches!(self.status, Status::Failed(_))
+    }
+}
+
+/// The Gauss-Newton system `JᵀWJ δ = −JᵀWr` of one linearisation, with its error.
+/// `merge` adds two partial systems, which is what a parallel reduction needs.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NormalEquations {
+    /// Upper triangle of `JᵀWJ`, row by row.
+    pub h: [f64; 21],
+    /// `JᵀWr`.
+    pub g: [f64; 6],
+    /// `Σ w e²`.
+    pub error: f64,
+    /// Number of residual pixels.
+    pub count: usize,
+}
+
+impl NormalEquations {
+    /// Adds another partial system.
+    pub fn merge(&mut self, o: &NormalEquations) {
+        for k in 0..21 {
+            self.h[k] += o.h[k];
+        }
+        for k in 0..6 {
+            self.g[k] += o.g[k];
+        }
+        self.error += o.error;
+        self.count += o.count;
+    }
+
+    /// `JᵀWJ` as a full symmetric matrix.
+    pub fn hessian(&self) -> Matrix6<f64> {
+        let mut m = Matrix6::zeros();
+        let mut k = 0;
+        for r in 0..6 {
+            for c in r..6 {
+                m[(r, c)] = self.h[k];
+                m[(c, r)] = self.h[k];
+                k += 1;
+            }
+        }
+        m
+    }
+
+    /// The Gauss-Newton step `δ = −(JᵀWJ)⁻¹ JᵀWr`, or `None` when the system is
+    /// not positive definite.
+    pub fn solve(&self) -> Option<Vector6<f64>> {
+        let chol = self.hessian().cholesky()?;
+        let step = -chol.solve(&Vector6::from_column_slice(&self.g));
+        step.iter().all(|x| x.is_finite()).then_some(step)
+    }
+}
+
+/// Accumulates weighted Jacobian rows in single precision over short runs and
+/// flushes them into double precision, keeping both speed and accuracy.
+struct Accumulator {
+    h: [f32; 21],
+    g: [f32; 6],
+    run: usize,
+    total: NormalEquations,
+}
+
+impl Accumulator {
+    const RUN: usize = 128;
+
+    fn new() -> Self {
+        Accumulator {
+            h: [0.0; 21],
+            g: [0.0; 6],
+            run: 0,
+            total: NormalEquations::default(),
+        }
+    }
+
+    #[inline(always)]
+    fn add(&mut self, j: &[f32; 6], r: f32, w: f32) {
+        let mut k = 0;
+        for a in 0..6 {
+            let wa = w * j[a];
+            for b in a..6 {
+                self.h[k] += wa * j[b];
+                k += 1;
+            }
+            self.g[a] += wa * r;
+        }
+    }
+
+    #[inline(always)]
+    fn end_pixel(&mut self, error: f32) {
+        self.total.error += error as f64;
+        self.total.count += 1;
+        self.run += 1;
+        if self.run == Self::RUN {
+            self.flush();
+        }
+    }
+
+    fn flush(&mut self) {
+        for k in 0..21 {
+            self.total.h[k] += self.h[k] as f64;
+            self.h[k] = 0.0;
+        }
+        for k in 0..6 {
+            self.total.g[k] += self.g[k] as f64;
+            self.g[k] = 0.0;
+        }
+        self.run = 0;
+    }
+
+    fn finish(mut self) -> NormalEquations {
+        self.flush();
+        self.total
+    }
+}
+
+/// One warped template point: its residuals and what its Jacobian needs.
+#[derive(Clone, Copy, Debug, Default)]
+struct Residual {
+    /// Photometric residual.
+    ri: f32,
+    /// Depth residual, NaN when the current depth is missing there.
+    rz: f32,
+    /// `e² = r_I² + λ² r_Z²`.
+    e2: f32,
+    /// Intensity gradient at `u'` (per pixel).
+    gx: f32,
+    gy: f32,
+    /// Depth gradient at `u'` (metres per pixel).
+    dx: f32,
+    dy: f32,
+    /// The warped point `T q` in current-camera coordinates.
+    p: [f32; 3],
+}
+
+/// Smallest number of residuals a coarse step needs to be worth solving.
+const MIN_STEP_RESIDUALS: usize = 24;
+
+/// Runs `MOTION` and keeps its scratch buffers between calls, so that a warm
+/// estimator does not allocate.
+#[derive(Debug, Default)]
+pub struct MotionEstimator {
+    residuals: Vec<Residual>,
+}
+
+impl MotionEstimator {
+    /// A new estimator with empty scratch buffers.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// `MOTION(Fi, Fj, Tinit)`: estimates `T_{i,j}`, the motion from the current
+    /// frame `fi` to the reference frame `fj`, starting from `t_init`. Both frames
+    /// must have been prepared with the same configuration.
+    pub fn motion(
+        &mut self,
+        fi: &PreparedFrame,
+        fj: &PreparedFrame,
+        t_init: &Pose,
+        cfg: &MotionConfig,
+    ) -> MotionResult {
+        let mut result = MotionResult {
+            pose: *t_init,
+            iterations: [0; MAX_STEPS],
+            steps: cfg.levels.len().min(MAX_STEPS),
+            error: f64::NAN,
+            valid_pixels: 0,
+            information: Matrix6::zeros(),
+            status: Status::Failed(Failure::TooFewPixels),
+        };
+        if !se3::is_finite(t_init) {
+            result.status = Status::Failed(Failure::NotFinite);
+            return result;
+        }
+        let lambda2 = (cfg.depth_gain * cfg.depth_gain) as f32;
+        let nu = cfg.t_dof as f32;
+        // T_{j→i}: moves reference points into the current camera.
+        let mut t = t_init.inverse();
+        let mut finest: Option<NormalEquations> = None;
+        let mut finest_hit_max = false;
+        for (k, step) in cfg.levels.iter().enumerate().take(MAX_STEPS) {
+            let (Some(level), Some(template)) =
+                (fi.levels.get(step.pyramid_level), fj.templates.get(k))
+            else {
+                break;
+            };
+            let last = k + 1 == result.steps;
+            let mut accepted: Option<NormalEquations> = None;
+            let mut prev_t = t;
+            let mut hit_max = true;
+            for it in 0..step.max_iterations {
+                let n = self.residuals_at(&t, &template.points, level, lambda2);
+                if n < MIN_STEP_RESIDUALS {
+                    hit_max = false;
+                    break;
+                }
+                let sigma2 = t_scale(&self.residuals, nu);
+                let ne = self.normal_equations(level, sigma2, nu, lambda2);
+                let err = ne.error / ne.count as f64;
+                if accepted.is_some_and(|a| err > a.error / a.count as f64) {
+                    // The last step made things worse: undo it and end this level.
+                    t = prev_t;
+                    hit_max = false;
+                    break;
+                }
+                result.iterations[k] = it + 1;
+                accepted = Some(ne);
+                let Some(delta) = ne.solve() else {
+                    hit_max = false;
+                    break;
+                };
+                prev_t = t;
+                t = se3::compose(&se3::exp(&delta), &t);
+                let small = delta.fixed_rows::<3>(0).norm() < cfg.min_update
+                    && delta.fixed_rows::<3>(3).norm() < cfg.min_update;
+                if small {
+                    hit_max = false;
+                    break;
+                }
+            }
+            if last {
+                finest = accepted;
+                finest_hit_max = hit_max;
+            }
+        }
+
+        let Some(ne) = finest else {
+            return result;
+        };
+        result.error = ne.error / ne.count as f64;
+        result.valid_pixels = ne.count;
+        result.information = ne.hessian();
+        let pose = t.inverse();
+        result.status = if ne.count < cfg.min_valid_pixels {
+            Status::Failed(Failure::TooFewPixels)
+        } else if !se3::is_finite(&pose) {
+            Status::Failed(Failure::NotFinite)
+        } else if is_degenerate(&result.information) {
+            Status::Failed(Failure::Degenerate)
+        } else if pose.translation.vector.norm() > cfg.max_translation_m
+            || se3::angle(&pose).to_degrees() > cfg.max_rotation_deg
+        {
+            Status::Failed(Failure::TooLarge)
+        } else if finest_hit_max {
+            Status::MaxIterations
+        } else {
+            Status::Converged
+        };
+        if result.is_ok() {
+            result.pose = pose;
+        }
+        result
+    }
+
+    /// Warps the template into `level` under `t` and stores the residuals; returns
+    /// how many template points produced a photometric residual.
+    fn residuals_at(
+        &mut self,
+        t: &Pose,
+        points: &[[f32; 4]],
+        level: &crate::prepare::ImageLevel,
+        lambda2: f32,
+    ) -> usize {
+        let cam = level.camera();
+        let (w, h) = (cam.width, cam.height);
+        let (fx, fy, cx, cy) = (cam.fx as f32, cam.fy as f32, cam.cx as f32, cam.cy as f32);
+        let m = t.to_homogeneous();
+        let r: [[f32; 4]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)] as f32));
+        let samples: &[Sample] = &level.samples;
+        assert_eq!(samples.len(), w * h, "level buffer matches its camera");
+        let (umax, vmax) = ((w - 1) as f32, (h - 1) as f32);
+        self.residuals.clear();
+        for q in points {
+            let x = r[0][0] * q[0] + r[0][1] * q[1] + r[0][2] * q[2] + r[0][3];
+            let y = r[1][0] * q[0] + r[1][1] * q[1] + r[1][2] * q[2] + r[1][3];
+            let z = r[2][0] * q[0] + r[2][1] * q[1] + r[2][2] * q[2] + r[2][3];
+            if z <= 1e-3 {
+                continue;
+            }
+            let iz = 1.0 / z;
+            let u = fx * x * iz + cx;
+            let v = fy * y * iz + cy;
+            // `!(a >= b)` also rejects NaN.
+            if !(u >= 0.0 && v >= 0.0 && u < umax && v < vmax) {
+                continue;
+            }
+            let s = bilinear(samples, w, u, v);
+            let ri = s[0] - q[3];
+            let rz = s[3] - z;
+            let depth_ok = rz.is_finite() && s[4].is_finite() && s[5].is_finite();
+            let rz = if depth_ok { rz } else { f32::NAN };
+            let e2 = if depth_ok {
+                ri * ri + lambda2 * rz * rz
+            } else {
+                ri * ri
+            };
+            self.residuals.push(Residual {
+                ri,
+                rz,
+                e2,
+                gx: s[1],
+                gy: s[2],
+                dx: s[4],
+                dy: s[5],
+                p: [x, y, z],
+            });
+        }
+        self.residuals.len()
+    }
+
+    /// Weights the stored residuals and accumulates the normal equations.
+    fn normal_equations(
+        &self,
+        level: &crate::prepare::ImageLevel,
+        sigma2: f32,
+        nu: f32,
+        lambda2: f32,
+    ) -> NormalEquations {
+        let cam = level.camera();
+        let (fx, fy) = (cam.fx as f32, cam.fy as f32);
+        let inv_s2 = 1.0 / sigma2;
+        let mut acc = Accumulator::new();
+        for r in &self.residuals {
+            let [x, y, z] = r.p;
+            let iz = 1.0 / z;
+            let depth = r.rz.is_finite();
+            let dims = if depth { 2.0 } else { 1.0 };
+            let w = (nu + dims) / (nu + r.e2 * inv_s2);
+            // Photometric row: ∇I · ∂π/∂p · [I | −[p]×].
+            let a = [
+                r.gx * fx * iz,
+                r.gy * fy * iz,
+                -(r.gx * fx * x + r.gy * fy * y) * iz * iz,
+            ];
+            acc.add(&twist_row(a, r.p), r.ri, w);
+            if depth {
+                // Depth row: (∇D · ∂π/∂p − e_z) · [I | −[p]×].
+                let b = [
+                    r.dx * fx * iz,
+                    r.dy * fy * iz,
+                    -(r.dx * fx * x + r.dy * fy * y) * iz * iz - 1.0,
+                ];
+                acc.add(&twist_row(b, r.p), r.rz, w * lambda2);
+            }
+            acc.end_pixel(w * r.e2);
+        }
+        acc.finish()
+    }
+}
+
+/// `a · [I | −[p]×] = [a, p × a]`.
+#[inline(always)]
+fn twist_row(a: [f32; 3], p: [f32; 3]) -> [f32; 6] {
+    [
+        a[0],
+        a[1],
+        a[2],
+        p[1] * a[2] - p[2] * a[1],
+        p[2] * a[0] - p[0] * a[2],
+        p[0] * a[1] - p[1] * a[0],
+    ]
+}
+
+/// Bilinear lookup of all channels at `(u, v)`; the caller guarantees
+/// `0 <= u < w - 1` and `0 <= v < h - 1`. Missing depth (NaN) propagates.
+#[inline(always)]
+fn bilinear(s: &[Sample], w: usize, u: f32, v: f32) -> Sample {
+    let (x0, y0) = (u as usize, v as usize);
+    let (ax, ay) = (u - x0 as f32, v - y0 as f32);
+    let i = y0 * w + x0;
+    let (p00, p01, p10, p11) = (&s[i], &s[i + 1], &s[i + w], &s[i + w + 1]);
+    let (w00, w01, w10, w11) = (
+        (1.0 - ax) * (1.0 - ay),
+        ax * (1.0 - ay),
+        (1.0 - ax) * ay,
+        ax * ay,
+    );
+    std::array::from_fn(|c| w00 * p00[c] + w01 * p01[c] + w10 * p10[c] + w11 * p11[c])
+}
+
+/// The scale σ² of a bivariate t-distribution with `nu` degrees of freedom fitted
+/// to the residuals by fixed-point iteration (Kerl et al.); pixels with only a
+/// photometric residual count as one dimension.
+fn t_scale(res: &[Residual], nu: f32) -> f32 {
+    let dims: f32 = res
+        .iter()
+        .map(|r| if r.rz.is_finite() { 2.0 } else { 1.0 })
+        .sum();
+    if res.is_empty() || dims == 0.0 {
+        return 1.0;
+    }
+    let mut s2 = (res.iter().map(|r| r.e2 as f64).sum::<f64>() / dims as f64).max(1e-12);
+    for _ in 0..20 {
+        let inv = 1.0 / s2;
+        let acc: f64 = res
+            .iter()
+            .map(|r| {
+                let d = if r.rz.is_finite() { 2.0 } else { 1.0 };
+                let e2 = r.e2 as f64;
+                e2 * (nu as f64 + d) / (nu as f64 + e2 * inv)
+            })
+            .sum();
+        let next = (acc / dims as f64).max(1e-12);
+        let done = (next - s2).abs() < 1e-3 * s2;
+        s2 = next;
+        if done {
+            break;
+        }
+    }
+    s2 as f32
+}
+
+/// True when the Jacobi-scaled information matrix is nearly singular: some motion
+/// is not observed by the input (a flat, textureless plane, for instance).
+fn is_degenerate(h: &Matrix6<f64>) -> bool {
+    let d: [f64; 6] = std::array::from_fn(|i| h[(i, i)]);
+    if d.iter().any(|&x| !(x > 0.0) || !x.is_finite()) {
+        return true;
+    }
+    let scaled = Matrix6::from_fn(|r, c| h[(r, c)] / (d[r] * d[c]).sqrt());
+    let eig = SymmetricEigen::new(scaled).eigenvalues;
+    let (lo, hi) = eig.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &e| {
+        (lo.min(e), hi.max(e))
+    });
+    !(lo > 1e-6 * hi)
+}
