@@ -1,0 +1,54 @@
+package io.ecvo
+
+import java.nio.ByteBuffer
+
+/**
+ * The native methods of libecvo_jni, declared once. Only [Tracker] calls them; the Rust
+ * side (`rust/ecvo-jni`) registers the same names and signatures, and a test checks that
+ * the two agree. Every method throws IllegalArgumentException for bad input,
+ * IllegalStateException for a released handle and RuntimeException for a caught panic.
+ */
+internal object NativeBridge {
+    init {
+        // The one place the library is loaded.
+        System.loadLibrary("ecvo_jni")
+    }
+
+    /** Creates a tracker; returns its handle (never 0). Codes: see [TrackerConfig]. */
+    @JvmStatic external fun nativeInit(
+        width: Int, height: Int,
+        fx: Double, fy: Double, cx: Double, cy: Double,
+        depthFormat: Int, depthScale: Double, minConfidence: Int,
+        preset: Int, mode: Int, live: Boolean, threads: Int,
+    ): Long
+
+    /** Copies one frame from direct buffers; returns a [PushStatus] code. */
+    @JvmStatic external fun nativePushBuffers(handle: Long, timestampNs: Long, depth: ByteBuffer?, intensity: ByteBuffer?): Int
+
+    /** Copies one frame from arrays; returns a [PushStatus] code. */
+    @JvmStatic external fun nativePushArrays(handle: Long, timestampNs: Long, depth: ShortArray?, intensity: ByteArray?): Int
+
+    /** Writes the latest pose (4x4 column-major, camera to world) into out[0..16]; returns its timestamp or Long.MIN_VALUE. */
+    @JvmStatic external fun nativeGetPose(handle: Long, out: FloatArray?): Long
+
+    /** The tracking state code: 0 initialising, 1 tracking, 2 lost. */
+    @JvmStatic external fun nativeState(handle: Long): Int
+
+    /** Blocks until every accepted frame has been tracked. */
+    @JvmStatic external fun nativeFlush(handle: Long)
+
+    /** The trajectory so far: 8 doubles per frame (t seconds, tx, ty, tz, qx, qy, qz, qw). */
+    @JvmStatic external fun nativeTrajectory(handle: Long): DoubleArray
+
+    /** The reference frames chosen so far, same layout plus the level: 9 doubles each. */
+    @JvmStatic external fun nativeReferences(handle: Long): DoubleArray
+
+    /** Statistics, see [TrackerStats.fromArray] for the layout. */
+    @JvmStatic external fun nativeStats(handle: Long): DoubleArray
+
+    /** A snapshot of the reference frames' point cloud: 4 floats per point (x, y, z, intensity 0..1), at most maxPoints. */
+    @JvmStatic external fun nativePointCloud(handle: Long, maxPoints: Int): FloatArray
+
+    /** Releases the tracker; idempotent on the Kotlin side, which zeroes the handle first. */
+    @JvmStatic external fun nativeRelease(handle: Long)
+}
