@@ -393,31 +393,41 @@ impl MotionEstimator {
         let inv_s2 = 1.0 / sigma2;
         let mut acc = Accumulator::new();
         for r in &self.residuals {
-            let [x, y, z] = r.p;
-            let iz = 1.0 / z;
             let depth = r.rz.is_finite();
             let dims = if depth { 2.0 } else { 1.0 };
             let w = (nu + dims) / (nu + r.e2 * inv_s2);
-            // Photometric row: ∇I · ∂π/∂p · [I | −[p]×].
-            let a = [
-                r.gx * fx * iz,
-                r.gy * fy * iz,
-                -(r.gx * fx * x + r.gy * fy * y) * iz * iz,
-            ];
-            acc.add(&twist_row(a, r.p), r.ri, w);
-            if depth {
-                // Depth row: (∇D · ∂π/∂p − e_z) · [I | −[p]×].
-                let b = [
-                    r.dx * fx * iz,
-                    r.dy * fy * iz,
-                    -(r.dx * fx * x + r.dy * fy * y) * iz * iz - 1.0,
-                ];
-                acc.add(&twist_row(b, r.p), r.rz, w * lambda2);
+            let (ji, jz) = jacobians(r, fx, fy);
+            acc.add(&ji, r.ri, w);
+            if let Some(jz) = jz {
+                acc.add(&jz, r.rz, w * lambda2);
             }
             acc.end_pixel(w * r.e2);
         }
         acc.finish()
     }
+}
+
+/// The Jacobians of the photometric and (when present) depth residuals of one
+/// warped point with respect to a left perturbation `exp(δ) T`:
+/// `J_I = ∇I · ∂π/∂p · [I | −[p]×]` and `J_Z = (∇D · ∂π/∂p − e_z) · [I | −[p]×]`.
+#[inline(always)]
+fn jacobians(r: &Residual, fx: f32, fy: f32) -> ([f32; 6], Option<[f32; 6]>) {
+    let [x, y, z] = r.p;
+    let iz = 1.0 / z;
+    let a = [
+        r.gx * fx * iz,
+        r.gy * fy * iz,
+        -(r.gx * fx * x + r.gy * fy * y) * iz * iz,
+    ];
+    let jz = r.rz.is_finite().then(|| {
+        let b = [
+            r.dx * fx * iz,
+            r.dy * fy * iz,
+            -(r.dx * fx * x + r.dy * fy * y) * iz * iz - 1.0,
+        ];
+        twist_row(b, r.p)
+    });
+    (twist_row(a, r.p), jz)
 }
 
 /// `a · [I | −[p]×] = [a, p × a]`.
@@ -495,4 +505,141 @@ fn is_degenerate(h: &Matrix6<f64>) -> bool {
         (lo.min(e), hi.max(e))
     });
     !(lo > 1e-6 * hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Camera;
+    use crate::prepare::ImageLevel;
+
+    /// A level whose intensity and depth are affine in the pixel coordinates, so that
+    /// central differences and bilinear interpolation are exact and finite
+    /// differences of the residuals must match the analytic Jacobians.
+    fn affine_level(fy: f64) -> ImageLevel {
+        let cam = Camera {
+            width: 64,
+            height: 48,
+            fx: 60.0,
+            fy,
+            cx: 31.5,
+            cy: 23.5,
+            depth_scale: 1000.0,
+        };
+        let (gx, gy, dx, dy) = (0.004f32, -0.003f32, 0.006f32, 0.004f32);
+        let samples = (0..cam.pixels())
+            .map(|i| {
+                let (u, v) = ((i % cam.width) as f32, (i / cam.width) as f32);
+                [
+                    0.3 + gx * u + gy * v,
+                    gx,
+                    gy,
+                    1.5 + dx * u + dy * v,
+                    dx,
+                    dy,
+                    0.0,
+                    0.0,
+                ]
+            })
+            .collect();
+        ImageLevel {
+            camera: Some(cam),
+            samples,
+        }
+    }
+
+    #[test]
+    fn analytic_jacobians_match_finite_differences() {
+        for fy in [58.0, -58.0] {
+            let level = affine_level(fy);
+            let cam = *level.camera();
+            let points: Vec<[f32; 4]> = (0..40)
+                .map(|k| {
+                    let (u, v, z) = (
+                        10.0 + (k % 8) as f64 * 5.0,
+                        8.0 + (k / 8) as f64 * 6.0,
+                        1.2 + 0.02 * k as f64,
+                    );
+                    [
+                        ((u - cam.cx) / cam.fx * z) as f32,
+                        ((v - cam.cy) / cam.fy * z) as f32,
+                        z as f32,
+                        0.5,
+                    ]
+                })
+                .collect();
+            let t = se3::exp(&Vector6::new(0.02, -0.01, 0.03, 0.01, -0.02, 0.015));
+            let mut est = MotionEstimator::new();
+            let n = est.residuals_at(&t, &points, &level, 3.24);
+            assert_eq!(n, points.len());
+            let base = est.residuals.clone();
+            let h = 1e-4;
+            for k in 0..6 {
+                let mut d = Vector6::zeros();
+                d[k] = h;
+                let plus = {
+                    est.residuals_at(&(se3::exp(&d) * t), &points, &level, 3.24);
+                    est.residuals.clone()
+                };
+                let minus = {
+                    est.residuals_at(&(se3::exp(&-d) * t), &points, &level, 3.24);
+                    est.residuals.clone()
+                };
+                for (i, r) in base.iter().enumerate() {
+                    let (ji, jz) = jacobians(r, cam.fx as f32, cam.fy as f32);
+                    let fd_i = (plus[i].ri - minus[i].ri) as f64 / (2.0 * h);
+                    let fd_z = (plus[i].rz - minus[i].rz) as f64 / (2.0 * h);
+                    let jz = jz.expect("depth is valid everywhere");
+                    assert!(
+                        (fd_i - ji[k] as f64).abs() < 2e-3 * (1.0 + fd_i.abs()),
+                        "fy {fy} J_I[{k}] point {i}: fd {fd_i} analytic {}",
+                        ji[k]
+                    );
+                    assert!(
+                        (fd_z - jz[k] as f64).abs() < 2e-3 * (1.0 + fd_z.abs()),
+                        "fy {fy} J_Z[{k}] point {i}: fd {fd_z} analytic {}",
+                        jz[k]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn t_scale_fits_a_known_spread() {
+        // Residuals drawn from ±s with no outliers: the t-scale sits near s².
+        let s = 0.05f32;
+        let res: Vec<Residual> = (0..1000)
+            .map(|i| {
+                let ri = if i % 2 == 0 { s } else { -s };
+                Residual {
+                    ri,
+                    rz: f32::NAN,
+                    e2: ri * ri,
+                    ..Residual::default()
+                }
+            })
+            .collect();
+        let s2 = t_scale(&res, 5.0);
+        assert!((s2 / (s * s) - 1.0).abs() < 0.05, "sigma² {s2}");
+        assert_eq!(t_scale(&[], 5.0), 1.0);
+    }
+
+    #[test]
+    fn normal_equations_merge_and_solve() {
+        let mut a = NormalEquations::default();
+        let mut k = 0;
+        for r in 0..6 {
+            for c in r..6 {
+                a.h[k] = if r == c { 2.0 } else { 0.0 };
+                k += 1;
+            }
+        }
+        a.g = [2.0, -4.0, 0.0, 0.0, 6.0, 0.0];
+        let b = a;
+        a.merge(&b);
+        let step = a.solve().unwrap();
+        assert_eq!(step.as_slice(), &[-1.0, 2.0, 0.0, 0.0, -3.0, 0.0]);
+        assert!(NormalEquations::default().solve().is_none());
+    }
 }

@@ -1,0 +1,65 @@
+//! Synthetic frames for the engine's tests, rendered by ecvo-synth.
+#![allow(dead_code)]
+
+use ecvo_core::{Camera, Config, FrameView, Mode, Pose, PreparedFrame, Preparer, Preset};
+use ecvo_synth::{DepthNoise, SynthCamera, SynthSequence};
+
+/// A 320x180 phone-like sequence with a fine depth unit (0.2 mm) and the given noise.
+pub fn sequence(noise: DepthNoise, seed: u64) -> SynthSequence {
+    let mut s = SynthSequence::phone_320x180(200, seed);
+    s.camera.depth_scale = 5000.0;
+    s.noise = noise;
+    s
+}
+
+pub fn camera_of(c: &SynthCamera) -> Camera {
+    Camera {
+        width: c.width,
+        height: c.height,
+        fx: c.fx,
+        fy: c.fy,
+        cx: c.cx,
+        cy: c.cy,
+        depth_scale: c.depth_scale,
+    }
+}
+
+pub fn config(seq: &SynthSequence, mode: Mode) -> Config {
+    Config::new(camera_of(&seq.camera), Preset::Pc, mode)
+}
+
+/// Frame `i` prepared with `cfg`, and its ground-truth pose.
+pub fn prepared(seq: &SynthSequence, i: usize, cfg: &Config) -> (PreparedFrame, Pose) {
+    let f = seq.frame(i);
+    prepare_raw(cfg, f.timestamp, &f.intensity, &f.depth, f.pose)
+}
+
+pub fn prepare_raw(
+    cfg: &Config,
+    t: f64,
+    intensity: &[u8],
+    depth: &[u16],
+    pose: Pose,
+) -> (PreparedFrame, Pose) {
+    let mut p = Preparer::new(cfg);
+    let mut out = PreparedFrame::default();
+    p.prepare_into(
+        FrameView {
+            timestamp: t,
+            intensity,
+            depth,
+        },
+        &mut out,
+    )
+    .unwrap();
+    (out, pose)
+}
+
+/// Translation error (m) and rotation error (deg) between two motions.
+pub fn pose_error(a: &Pose, b: &Pose) -> (f64, f64) {
+    let d = a.inverse() * b;
+    (
+        d.translation.vector.norm(),
+        ecvo_core::se3::angle(&d).to_degrees(),
+    )
+}

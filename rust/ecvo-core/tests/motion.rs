@@ -1,0 +1,165 @@
+//! MOTION on synthetic frames rendered from a known textured scene under a known motion.
+
+mod common;
+
+use common::*;
+use ecvo_core::motion::{Failure, MotionEstimator, Status};
+use ecvo_core::{FrameView, Mode, Pose, PreparedFrame, Preparer};
+use ecvo_synth::DepthNoise;
+
+/// Frames `a` (reference) and `b` (current) of a sequence; returns the estimate of
+/// `T_{b,a}` from the identity and the ground truth `P_a⁻¹ P_b`.
+fn estimate(
+    seq: &ecvo_synth::SynthSequence,
+    a: usize,
+    b: usize,
+    cfg: &ecvo_core::Config,
+) -> (ecvo_core::MotionResult, Pose) {
+    let (fa, pa) = prepared(seq, a, cfg);
+    let (fb, pb) = prepared(seq, b, cfg);
+    let truth = pa.inverse() * pb;
+    let r = MotionEstimator::new().motion(&fb, &fa, &Pose::identity(), &cfg.motion);
+    (r, truth)
+}
+
+#[test]
+fn recovers_motion_on_noise_free_frames() {
+    let seq = sequence(DepthNoise::none(), 7);
+    let cfg = config(&seq, Mode::Naive);
+    // Consecutive frames and frames several steps apart (a few cm, a few degrees).
+    for (a, b) in [(0, 1), (10, 11), (30, 33), (50, 55), (80, 84)] {
+        let (r, truth) = estimate(&seq, a, b, &cfg);
+        assert!(r.is_ok(), "{a}->{b}: {:?}", r.status);
+        let (dt, da) = pose_error(&r.pose, &truth);
+        let moved = truth.translation.vector.norm();
+        println!(
+            "{a}->{b}: moved {:.1} mm {:.2} deg; error {:.3} mm {:.4} deg, {} px, it {:?}",
+            moved * 1e3,
+            ecvo_core::se3::angle(&truth).to_degrees(),
+            dt * 1e3,
+            da,
+            r.valid_pixels,
+            &r.iterations[..r.steps]
+        );
+        assert!(dt < 1e-3, "{a}->{b}: translation error {:.3} mm", dt * 1e3);
+        assert!(da < 0.05, "{a}->{b}: rotation error {da:.4} deg");
+    }
+}
+
+#[test]
+fn recovers_motion_with_depth_noise_and_outliers() {
+    let seq = sequence(DepthNoise::kinect_like(), 11);
+    let cfg = config(&seq, Mode::Naive);
+    let mut worst = (0.0f64, 0.0f64);
+    for (a, b) in [(0, 1), (20, 22), (40, 43), (70, 72)] {
+        let fa = seq.frame(a);
+        let mut fb = seq.frame(b);
+        // 20 % outliers in the current frame: random intensity and depth values.
+        let mut state = 0x9E37_79B9_7F4A_7C15u64 ^ b as u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for i in 0..fb.intensity.len() {
+            if next() % 5 == 0 {
+                fb.intensity[i] = (next() % 256) as u8;
+                fb.depth[i] = 2500 + (next() % 20000) as u16;
+            }
+        }
+        let (pa, ta) = prepare_raw(&cfg, fa.timestamp, &fa.intensity, &fa.depth, fa.pose);
+        let (pb, tb) = prepare_raw(&cfg, fb.timestamp, &fb.intensity, &fb.depth, fb.pose);
+        let r = MotionEstimator::new().motion(&pb, &pa, &Pose::identity(), &cfg.motion);
+        assert!(r.is_ok(), "{a}->{b}: {:?}", r.status);
+        let (dt, da) = pose_error(&r.pose, &(ta.inverse() * tb));
+        println!("{a}->{b}: error {:.3} mm {:.4} deg", dt * 1e3, da);
+        worst = (worst.0.max(dt), worst.1.max(da));
+    }
+    // Stated tolerance with Kinect-like depth noise and 20 % outliers: 5 mm, 0.25 deg.
+    assert!(
+        worst.0 < 5e-3 && worst.1 < 0.25,
+        "worst error {:.3} mm {:.4} deg",
+        worst.0 * 1e3,
+        worst.1
+    );
+}
+
+#[test]
+fn a_good_initial_guess_is_kept_and_refined() {
+    // Box [B]: seeded with the accumulated motion, MOTION converges over a larger gap.
+    let seq = sequence(DepthNoise::none(), 3);
+    let cfg = config(&seq, Mode::L1);
+    let (fa, pa) = prepared(&seq, 20, &cfg);
+    let (fb, pb) = prepared(&seq, 32, &cfg);
+    let truth = pa.inverse() * pb;
+    let seed = truth
+        * ecvo_core::se3::exp(&nalgebra::Vector6::new(
+            0.004, -0.003, 0.002, 0.004, 0.003, -0.002,
+        ));
+    let r = MotionEstimator::new().motion(&fb, &fa, &seed, &cfg.motion);
+    assert!(r.is_ok());
+    let (dt, da) = pose_error(&r.pose, &truth);
+    assert!(
+        dt < 1e-3 && da < 0.05,
+        "error {:.3} mm {:.4} deg",
+        dt * 1e3,
+        da
+    );
+}
+
+fn flat(cfg: &ecvo_core::Config, gray: u8, depth: u16) -> PreparedFrame {
+    let n = cfg.camera.pixels();
+    let mut out = PreparedFrame::default();
+    Preparer::new(cfg)
+        .prepare_into(
+            FrameView {
+                timestamp: 0.0,
+                intensity: &vec![gray; n],
+                depth: &vec![depth; n],
+            },
+            &mut out,
+        )
+        .unwrap();
+    out
+}
+
+#[test]
+fn degenerate_input_fails_cleanly() {
+    let seq = sequence(DepthNoise::none(), 1);
+    let cfg = config(&seq, Mode::Naive);
+    let (good, _) = prepared(&seq, 0, &cfg);
+    let mut est = MotionEstimator::new();
+    // All-zero depth in the reference: no template point to align.
+    let empty = flat(&cfg, 128, 0);
+    for (fi, fj) in [(&good, &empty), (&empty, &empty)] {
+        let r = est.motion(fi, fj, &Pose::identity(), &cfg.motion);
+        assert_eq!(r.status, Status::Failed(Failure::TooFewPixels));
+        assert_eq!(r.pose, Pose::identity());
+    }
+    // A current frame without depth and without texture constrains nothing.
+    let r = est.motion(&empty, &good, &Pose::identity(), &cfg.motion);
+    assert_eq!(r.status, Status::Failed(Failure::Degenerate));
+    assert_eq!(r.pose, Pose::identity());
+    // Flat intensity on a fronto-parallel plane: three of six motions are unobservable.
+    let plane = flat(&cfg, 90, 10000);
+    let r = est.motion(&plane, &plane, &Pose::identity(), &cfg.motion);
+    assert_eq!(r.status, Status::Failed(Failure::Degenerate));
+    assert!(ecvo_core::se3::is_finite(&r.pose));
+    // A non-finite initial guess never produces a NaN pose.
+    let mut bad = Pose::identity();
+    bad.translation.vector.x = f64::NAN;
+    let r = est.motion(&good, &good, &bad, &cfg.motion);
+    assert_eq!(r.status, Status::Failed(Failure::NotFinite));
+}
+
+#[test]
+fn information_matrix_is_symmetric_positive_definite() {
+    let seq = sequence(DepthNoise::none(), 5);
+    let cfg = config(&seq, Mode::Naive);
+    let (r, _) = estimate(&seq, 0, 1, &cfg);
+    let h = r.information;
+    assert!((h - h.transpose()).abs().max() < 1e-9 * h.abs().max());
+    assert!(h.cholesky().is_some());
+    assert!(r.valid_pixels > 10_000, "{} valid pixels", r.valid_pixels);
+}
