@@ -260,14 +260,16 @@ impl MotionEstimator {
             let mut accepted: Option<NormalEquations> = None;
             let mut prev_t = t;
             let mut hit_max = true;
+            let mut sigma2 = None;
             for it in 0..step.max_iterations {
                 let n = self.residuals_at(&t, &template.points, level, lambda2);
                 if n < MIN_STEP_RESIDUALS {
                     hit_max = false;
                     break;
                 }
-                let sigma2 = t_scale(&self.residuals, nu);
-                let ne = self.normal_equations(level, sigma2, nu, lambda2);
+                let s2 = t_scale(&self.residuals, nu, sigma2);
+                sigma2 = Some(s2);
+                let ne = self.normal_equations(level, s2, nu, lambda2);
                 let err = ne.error / ne.count as f64;
                 if accepted.is_some_and(|a| err > a.error / a.count as f64) {
                     // The last step made things worse: undo it and end this level.
@@ -461,9 +463,10 @@ fn bilinear(s: &[Sample], w: usize, u: f32, v: f32) -> Sample {
 }
 
 /// The scale σ² of a bivariate t-distribution with `nu` degrees of freedom fitted
-/// to the residuals by fixed-point iteration (Kerl et al.); pixels with only a
-/// photometric residual count as one dimension.
-fn t_scale(res: &[Residual], nu: f32) -> f32 {
+/// to the residuals by fixed-point iteration (Kerl et al.), started from `start`
+/// (the previous iteration's scale) when given; pixels with only a photometric
+/// residual count as one dimension.
+fn t_scale(res: &[Residual], nu: f32, start: Option<f32>) -> f32 {
     let dims: f32 = res
         .iter()
         .map(|r| if r.rz.is_finite() { 2.0 } else { 1.0 })
@@ -471,15 +474,22 @@ fn t_scale(res: &[Residual], nu: f32) -> f32 {
     if res.is_empty() || dims == 0.0 {
         return 1.0;
     }
-    let mut s2 = (res.iter().map(|r| r.e2 as f64).sum::<f64>() / dims as f64).max(1e-12);
+    let mut s2 = match start {
+        Some(s) if s > 0.0 && s.is_finite() => s as f64,
+        _ => (res.iter().map(|r| r.e2 as f64).sum::<f64>() / dims as f64).max(1e-12),
+    };
     for _ in 0..20 {
-        let inv = 1.0 / s2;
+        let inv = (1.0 / s2) as f32;
+        // Sum in f32 over short runs, then in f64.
         let acc: f64 = res
-            .iter()
-            .map(|r| {
-                let d = if r.rz.is_finite() { 2.0 } else { 1.0 };
-                let e2 = r.e2 as f64;
-                e2 * (nu as f64 + d) / (nu as f64 + e2 * inv)
+            .chunks(256)
+            .map(|c| {
+                c.iter()
+                    .map(|r| {
+                        let d = if r.rz.is_finite() { 2.0 } else { 1.0 };
+                        r.e2 * (nu + d) / (nu + r.e2 * inv)
+                    })
+                    .sum::<f32>() as f64
             })
             .sum();
         let next = (acc / dims as f64).max(1e-12);
@@ -620,9 +630,11 @@ mod tests {
                 }
             })
             .collect();
-        let s2 = t_scale(&res, 5.0);
+        let s2 = t_scale(&res, 5.0, None);
         assert!((s2 / (s * s) - 1.0).abs() < 0.05, "sigma² {s2}");
-        assert_eq!(t_scale(&[], 5.0), 1.0);
+        assert_eq!(t_scale(&[], 5.0, None), 1.0);
+        let warm = t_scale(&res, 5.0, Some(0.01));
+        assert!((warm / s2 - 1.0).abs() < 0.01, "warm start {warm} vs {s2}");
     }
 
     #[test]

@@ -238,10 +238,12 @@ impl Preparer {
     /// only; the range sigma is a fraction of the centre depth.
     fn bilateral(&mut self, radius: usize, sigma_rel: f32) {
         let (w, h) = (self.camera.width, self.camera.height);
-        let r = radius as isize;
         let side = 2 * radius + 1;
         let lut_scale = LUT_SIZE as f32 / RANGE_CUT;
+        let lut: &[f32; LUT_SIZE] = self.range_lut.as_slice().try_into().expect("LUT size");
+        let spatial = &self.spatial;
         for y in 0..h {
+            let (y0, y1) = (y.saturating_sub(radius), (y + radius).min(h - 1));
             for x in 0..w {
                 let zc = self.depth[y * w + x];
                 if !zc.is_finite() {
@@ -250,26 +252,18 @@ impl Preparer {
                 }
                 let s = sigma_rel * zc;
                 let inv = lut_scale / (2.0 * s * s);
+                let (x0, x1) = (x.saturating_sub(radius), (x + radius).min(w - 1));
                 let (mut acc, mut wsum) = (0.0f32, 0.0f32);
-                for dy in -r..=r {
-                    let yy = y as isize + dy;
-                    if yy < 0 || yy >= h as isize {
-                        continue;
-                    }
-                    let row = &self.depth[yy as usize * w..(yy as usize + 1) * w];
-                    let srow =
-                        &self.spatial[(dy + r) as usize * side..(dy + r + 1) as usize * side];
-                    for dx in -r..=r {
-                        let xx = x as isize + dx;
-                        if xx < 0 || xx >= w as isize {
-                            continue;
-                        }
-                        let z = row[xx as usize];
+                for yy in y0..=y1 {
+                    let row = &self.depth[yy * w + x0..=yy * w + x1];
+                    let so = (yy + radius - y) * side + (x0 + radius - x);
+                    let srow = &spatial[so..so + row.len()];
+                    for (&z, &ws) in row.iter().zip(srow) {
                         let d = z - zc;
                         let k = d * d * inv;
                         // NaN compares false, so missing neighbours are skipped too.
                         if k < LUT_SIZE as f32 {
-                            let wgt = srow[(dx + r) as usize] * self.range_lut[k as usize];
+                            let wgt = ws * lut[(k as usize).min(LUT_SIZE - 1)];
                             acc += wgt * z;
                             wsum += wgt;
                         }
