@@ -1,1 +1,275 @@
-fn main() {}
+//! `ecvo`: track an RGB-D camera through a recorded sequence with the improved
+//! frame-to-frame method of An et al. (WACV 2018), evaluate trajectories, reproduce
+//! the paper's Table 1 and render synthetic test streams.
+//!
+//! Every error is printed as one message naming the file (and line) involved, and
+//! the process exits with status 1 (2 for unusable command-line flags).
+
+mod engine;
+mod plot;
+mod run;
+mod stats;
+mod synth;
+mod table;
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::Result;
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use ecvo_core::{Mode, Preset};
+use ecvo_io::Trajectory;
+use serde_json::json;
+
+use crate::plot::Plane;
+use crate::run::{Evaluation, RunOutputs, TrackSettings};
+use crate::synth::Noise;
+
+#[derive(Parser)]
+#[command(
+    name = "ecvo",
+    version,
+    about = "RGB-D camera tracking (An et al., WACV 2018)"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Track a sequence and write trajectory.txt, references.txt, summary.json,
+    /// cloud.ply and trajectory.svg into --out.
+    Run {
+        /// Sequence folder (TUM layout with camera.json, or ICL-NUIM).
+        seq: PathBuf,
+        #[command(flatten)]
+        track: TrackArgs,
+        /// Which error-correction levels run.
+        #[arg(long, value_enum, default_value_t = ModeArg::L2)]
+        mode: ModeArg,
+        /// Reference levels overriding the preset's, e.g. "30mm:7deg,120mm:12deg".
+        #[arg(long, allow_hyphen_values = true)]
+        levels: Option<String>,
+        /// Switch the bilateral depth filter off.
+        #[arg(long)]
+        no_bilateral: bool,
+        /// Switch the normal-based removal filter off.
+        #[arg(long)]
+        no_normal_filter: bool,
+        /// Switch the contour-based removal filter off.
+        #[arg(long)]
+        no_contour_filter: bool,
+        /// Output folder (created if needed; files in it are overwritten).
+        #[arg(long)]
+        out: PathBuf,
+        /// Point cloud: take every Nth pixel in each direction.
+        #[arg(long, default_value_t = 4)]
+        cloud_stride: usize,
+        /// Point cloud with --mode naive: take every Nth frame.
+        #[arg(long, default_value_t = 15)]
+        cloud_every: usize,
+        /// Plane of the top view in trajectory.svg.
+        #[arg(long, value_enum, default_value_t = Plane::Xz)]
+        plot_plane: Plane,
+    },
+    /// ATE and RPE of an estimated TUM trajectory against a ground-truth one.
+    Eval {
+        /// Ground-truth trajectory (TUM format).
+        gt: PathBuf,
+        /// Estimated trajectory (TUM format).
+        est: PathBuf,
+        /// Print a JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Print the paper's Table 1 (naive, L1, L2) for the given sequences as Markdown.
+    Table {
+        /// Sequence folders.
+        #[arg(required = true)]
+        seqs: Vec<PathBuf>,
+        #[command(flatten)]
+        track: TrackArgs,
+    },
+    /// Render a synthetic 320x180 phone-like stream with exact ground truth.
+    Synth {
+        /// Output folder (must not already hold a sequence).
+        #[arg(long)]
+        out: PathBuf,
+        /// Number of frames (30 per second).
+        #[arg(long, default_value_t = 90)]
+        frames: usize,
+        /// Seed of the scene, the camera path and the noise.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Sensor noise model.
+        #[arg(long, value_enum, default_value_t = Noise::Phone)]
+        noise: Noise,
+        /// Timestamp of the first frame, seconds.
+        #[arg(long, default_value_t = 1_700_000_000.0)]
+        start_time: f64,
+    },
+}
+
+/// Settings shared by `run` and `table`.
+#[derive(Args)]
+struct TrackArgs {
+    /// Thresholds and filter angles: the paper's PC (Table 1) or phone (Table 2) values.
+    #[arg(long, value_enum, default_value_t = PresetArg::Pc)]
+    preset: PresetArg,
+    /// Track only the first N frames.
+    #[arg(long)]
+    max_frames: Option<usize>,
+    /// A camera.json overriding the sequence's.
+    #[arg(long)]
+    camera: Option<PathBuf>,
+    /// Worker threads (recorded; the current engine runs the stages on one thread).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
+    threads: u32,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ModeArg {
+    Naive,
+    L1,
+    L2,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum PresetArg {
+    Pc,
+    Phone,
+}
+
+impl TrackArgs {
+    fn settings(&self, mode: Mode) -> TrackSettings {
+        TrackSettings {
+            mode,
+            preset: match self.preset {
+                PresetArg::Pc => Preset::Pc,
+                PresetArg::Phone => Preset::Phone,
+            },
+            levels: None,
+            bilateral: true,
+            normal_filter: true,
+            contour_filter: true,
+            camera: self.camera.clone(),
+            max_frames: self.max_frames,
+            threads: self.threads as usize,
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match dispatch(cli.command) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", message(&e));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The error and its causes on one line, leaving out a cause that the message before
+/// it already quotes (ecvo-io's errors include their I/O source in their text).
+fn message(e: &anyhow::Error) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if parts.last().is_some_and(|prev| prev.contains(&text)) {
+            continue;
+        }
+        parts.push(text);
+    }
+    parts.join(": ")
+}
+
+fn dispatch(command: Command) -> Result<()> {
+    match command {
+        Command::Run {
+            seq,
+            track,
+            mode,
+            levels,
+            no_bilateral,
+            no_normal_filter,
+            no_contour_filter,
+            out,
+            cloud_stride,
+            cloud_every,
+            plot_plane,
+        } => {
+            let mode = match mode {
+                ModeArg::Naive => Mode::Naive,
+                ModeArg::L1 => Mode::L1,
+                ModeArg::L2 => Mode::L2,
+            };
+            let settings = TrackSettings {
+                levels,
+                bilateral: !no_bilateral,
+                normal_filter: !no_normal_filter,
+                contour_filter: !no_contour_filter,
+                ..track.settings(mode)
+            };
+            let outs = RunOutputs {
+                out,
+                cloud_stride,
+                cloud_every,
+                plane: plot_plane,
+            };
+            run::run_command(&seq, &settings, &outs)
+        }
+        Command::Eval { gt, est, json } => eval_command(&gt, &est, json),
+        Command::Table { seqs, track } => table::table_command(&seqs, &track.settings(Mode::L2)),
+        Command::Synth {
+            out,
+            frames,
+            seed,
+            noise,
+            start_time,
+        } => synth::synth_command(&out, frames, seed, noise, start_time),
+    }
+}
+
+/// `ecvo eval`.
+fn eval_command(gt_path: &Path, est_path: &Path, as_json: bool) -> Result<()> {
+    let gt = Trajectory::read_tum(gt_path)?;
+    let est = Trajectory::read_tum(est_path)?;
+    // ATE is what eval is for: its failure (no overlap in time) is an error.
+    let ate = ecvo_io::eval::ate(&gt, &est).map_err(|e| {
+        anyhow::anyhow!("{} against {}: {e}", est_path.display(), gt_path.display())
+    })?;
+    let mut eval = Evaluation::new(&gt, &est);
+    eval.ate = Some(ate.clone());
+    let a = &ate;
+    if as_json {
+        let v = json!({
+            "groundtruth": gt_path.display().to_string(),
+            "estimate": est_path.display().to_string(),
+            "ate_rmse_m": a.rmse,
+            "ate": eval.ate_json(),
+            "rpe": eval.rpe_json(),
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        println!(
+            "ATE RMSE: {:.4} m (mean {:.4}, median {:.4}, max {:.4}; {} poses)",
+            a.rmse, a.mean, a.median, a.max, a.count
+        );
+        match &eval.rpe_s {
+            Some(r) => println!(
+                "RPE over 1 s: {:.4} m/s, {:.3} deg/s (RMSE, {} pairs)",
+                r.trans.rmse, r.rot_deg.rmse, r.trans.count
+            ),
+            None => println!("RPE over 1 s: n/a (the trajectories are too short)"),
+        }
+        if let Some(r) = &eval.rpe_frame {
+            println!(
+                "RPE per frame: {:.5} m, {:.4} deg (RMSE, {} pairs)",
+                r.trans.rmse, r.rot_deg.rmse, r.trans.count
+            );
+        }
+    }
+    Ok(())
+}

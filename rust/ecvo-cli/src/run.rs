@@ -1,0 +1,470 @@
+//! `ecvo run`: track a sequence and write the trajectory, the reference frames, a
+//! summary, a point cloud and a plot.
+
+use std::fmt::Write as _;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use ecvo_core::config::parse_levels;
+use ecvo_core::{Camera, Config, Mode, Preset, ReferenceLevel, TrackingState};
+use ecvo_io::eval::{AteResult, RpeResult};
+use ecvo_io::{Sequence, Trajectory};
+use serde::Serialize;
+use serde_json::json;
+
+use crate::engine::{CloudFrames, EngineOptions, TrackRun, track_sequence};
+use crate::plot::{Plane, write_trajectory_svg};
+use crate::stats::MedianMean;
+
+/// Everything that decides how a sequence is tracked.
+#[derive(Clone, Debug)]
+pub struct TrackSettings {
+    /// Which error-correction levels run.
+    pub mode: Mode,
+    /// Which thresholds and filter angles to start from.
+    pub preset: Preset,
+    /// Reference levels overriding the preset's, as given on the command line.
+    pub levels: Option<String>,
+    /// Bilateral filter on depth.
+    pub bilateral: bool,
+    /// Normal-based removal filter.
+    pub normal_filter: bool,
+    /// Contour-based removal filter.
+    pub contour_filter: bool,
+    /// A camera.json overriding the sequence's.
+    pub camera: Option<PathBuf>,
+    /// Track only the first this many frames.
+    pub max_frames: Option<usize>,
+    /// Worker threads.
+    pub threads: usize,
+}
+
+/// Name of a mode as the command line spells it.
+pub fn mode_name(mode: Mode) -> &'static str {
+    match mode {
+        Mode::Naive => "naive",
+        Mode::L1 => "l1",
+        Mode::L2 => "l2",
+    }
+}
+
+/// Name of a preset as the command line spells it.
+pub fn preset_name(preset: Preset) -> &'static str {
+    match preset {
+        Preset::Pc => "pc",
+        Preset::Phone => "phone",
+    }
+}
+
+/// Levels written as `--levels` takes them (`30mm:7deg,120mm:12deg`).
+pub fn levels_string(levels: &[ReferenceLevel]) -> String {
+    if levels.is_empty() {
+        return "none".into();
+    }
+    levels
+        .iter()
+        .map(|l| format!("{}mm:{}deg", l.max_distance_m * 1000.0, l.max_angle_deg))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+impl TrackSettings {
+    /// Opens the sequence, with the `--camera` file if one was given.
+    pub fn open_sequence(&self, seq: &Path) -> Result<Sequence> {
+        let camera = match &self.camera {
+            Some(path) => Some(
+                ecvo_io::load_camera_json(path)
+                    .with_context(|| format!("--camera {}", path.display()))?,
+            ),
+            None => None,
+        };
+        Ok(Sequence::open(seq, camera)?)
+    }
+
+    /// The tracker configuration for `camera`.
+    ///
+    /// The reference levels are `--levels` if given, else the preset's; the mode keeps
+    /// none of them (naive), the first (l1) or all of them (l2, at least two).
+    pub fn config(&self, camera: Camera) -> Result<Config> {
+        let mut config = Config::new(camera, self.preset, Mode::L2);
+        if let Some(text) = &self.levels {
+            config.reference_levels =
+                parse_levels(text).with_context(|| format!("--levels `{text}`"))?;
+        }
+        let available = config.reference_levels.len();
+        let keep = match self.mode {
+            Mode::Naive => 0,
+            Mode::L1 => 1,
+            Mode::L2 => available.max(2),
+        };
+        if keep > available {
+            bail!(
+                "--mode {} needs at least {keep} reference level(s) but --levels `{}` gives {available}",
+                mode_name(self.mode),
+                self.levels.as_deref().unwrap_or_default()
+            );
+        }
+        config.reference_levels.truncate(keep);
+        if !self.bilateral {
+            config.filter.bilateral = None;
+        }
+        if !self.normal_filter {
+            config.filter.normal_max_angle_deg = None;
+        }
+        if !self.contour_filter {
+            config.filter.contour_angle_deg = None;
+        }
+        config.validate().context("invalid tracker configuration")?;
+        Ok(config)
+    }
+}
+
+/// Ground-truth comparison of a run.
+#[derive(Clone, Debug, Default)]
+pub struct Evaluation {
+    /// Absolute trajectory error.
+    pub ate: Option<AteResult>,
+    /// Relative pose error over 1 s.
+    pub rpe_s: Option<RpeResult>,
+    /// Relative pose error between consecutive frames.
+    pub rpe_frame: Option<RpeResult>,
+}
+
+impl Evaluation {
+    /// Compares `est` with `gt`; an error (too few associated poses) leaves a field
+    /// empty and is logged.
+    pub fn new(gt: &Trajectory, est: &Trajectory) -> Evaluation {
+        fn keep<T>(what: &str, r: ecvo_io::Result<T>) -> Option<T> {
+            match r {
+                Ok(v) => Some(v),
+                Err(e) => {
+                    log::warn!("{what}: {e}");
+                    None
+                }
+            }
+        }
+        Evaluation {
+            ate: keep("ATE", ecvo_io::eval::ate(gt, est)),
+            rpe_s: keep("RPE over 1 s", ecvo_io::eval::rpe(gt, est, 1.0)),
+            rpe_frame: keep("RPE per frame", ecvo_io::eval::rpe_per_frame(gt, est)),
+        }
+    }
+
+    /// The `ate` object of the JSON outputs.
+    pub fn ate_json(&self) -> serde_json::Value {
+        match &self.ate {
+            Some(a) => json!({
+                "rmse_m": a.rmse, "mean_m": a.mean, "median_m": a.median, "std_m": a.std,
+                "min_m": a.min, "max_m": a.max, "pairs": a.count,
+            }),
+            None => serde_json::Value::Null,
+        }
+    }
+
+    /// The `rpe` object of the JSON outputs.
+    pub fn rpe_json(&self) -> serde_json::Value {
+        if self.rpe_s.is_none() && self.rpe_frame.is_none() {
+            return serde_json::Value::Null;
+        }
+        let per_second = self.rpe_s.as_ref().map(|r| {
+            json!({
+                "trans_m_per_s": r.trans.rmse, "rot_deg_per_s": r.rot_deg.rmse,
+                "trans_mean_m_per_s": r.trans.mean, "rot_mean_deg_per_s": r.rot_deg.mean,
+                "pairs": r.trans.count,
+            })
+        });
+        let per_frame = self.rpe_frame.as_ref().map(|r| {
+            json!({
+                "trans_m": r.trans.rmse, "rot_deg": r.rot_deg.rmse,
+                "trans_mean_m": r.trans.mean, "rot_mean_deg": r.rot_deg.mean,
+                "pairs": r.trans.count,
+            })
+        });
+        json!({
+            "trans_m_per_s": self.rpe_s.as_ref().map(|r| r.trans.rmse),
+            "rot_deg_per_s": self.rpe_s.as_ref().map(|r| r.rot_deg.rmse),
+            "per_second": per_second,
+            "per_frame": per_frame,
+        })
+    }
+}
+
+/// Per-stage milliseconds per frame.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct StageStats {
+    /// The filter stage (frame preparation).
+    pub filter: MedianMean,
+    /// The tracker stage (motion estimation and correction).
+    pub tracker: MedianMean,
+    /// Both stages.
+    pub total: MedianMean,
+}
+
+impl StageStats {
+    /// The statistics of a run.
+    pub fn of(run: &TrackRun) -> Self {
+        StageStats {
+            filter: MedianMean::of(run.times.iter().map(|t| t.filter_ms)),
+            tracker: MedianMean::of(run.times.iter().map(|t| t.tracker_ms)),
+            total: MedianMean::of(run.times.iter().map(|t| t.total_ms())),
+        }
+    }
+}
+
+/// A tracked and evaluated sequence.
+pub struct Tracked {
+    /// The opened sequence.
+    pub sequence: Sequence,
+    /// The configuration used.
+    pub config: Config,
+    /// The engine's results.
+    pub run: TrackRun,
+    /// The estimated trajectory (every frame).
+    pub trajectory: Trajectory,
+    /// Comparison with the ground truth, if the sequence has one.
+    pub eval: Evaluation,
+}
+
+/// Opens, tracks and evaluates `seq`.
+pub fn track(
+    seq: &Path,
+    settings: &TrackSettings,
+    cloud: CloudFrames,
+    cloud_stride: usize,
+) -> Result<Tracked> {
+    let sequence = settings.open_sequence(seq)?;
+    let config = settings.config(*sequence.camera())?;
+    let opts = EngineOptions {
+        max_frames: settings.max_frames,
+        threads: settings.threads,
+        progress: std::io::stderr().is_terminal(),
+        cloud,
+        cloud_stride,
+    };
+    let run = track_sequence(&sequence, &config, &opts)?;
+    if run.outputs.is_empty() {
+        bail!("{}: no frame was tracked", seq.display());
+    }
+    let mut trajectory = Trajectory::with_capacity(run.outputs.len());
+    for o in &run.outputs {
+        trajectory.push(o.timestamp, o.pose);
+    }
+    let eval = match sequence.groundtruth() {
+        Some(gt) => Evaluation::new(gt, &trajectory),
+        None => Evaluation::default(),
+    };
+    Ok(Tracked {
+        sequence,
+        config,
+        run,
+        trajectory,
+        eval,
+    })
+}
+
+/// Options of `ecvo run` beyond the tracking settings.
+#[derive(Clone, Debug)]
+pub struct RunOutputs {
+    /// Output folder.
+    pub out: PathBuf,
+    /// Pixel stride of the point cloud.
+    pub cloud_stride: usize,
+    /// With naive tracking, every how many frames the cloud takes a frame.
+    pub cloud_every: usize,
+    /// Plane of the top view.
+    pub plane: Plane,
+}
+
+/// `ecvo run`.
+pub fn run_command(seq: &Path, settings: &TrackSettings, outs: &RunOutputs) -> Result<()> {
+    if outs.cloud_stride == 0 || outs.cloud_every == 0 {
+        bail!("--cloud-stride and --cloud-every must be at least 1");
+    }
+    let cloud = if settings.mode == Mode::Naive {
+        CloudFrames::EveryNth(outs.cloud_every)
+    } else {
+        CloudFrames::References
+    };
+    // Open and check everything before the (long) run, so that a bad output folder
+    // fails at once.
+    std::fs::create_dir_all(&outs.out)
+        .with_context(|| format!("cannot create the output folder {}", outs.out.display()))?;
+    let t = track(seq, settings, cloud, outs.cloud_stride)?;
+    let out = &outs.out;
+
+    t.trajectory.write_tum(out.join("trajectory.txt"))?;
+    write_references(&out.join("references.txt"), &t)?;
+    let cloud_points = write_cloud(&out.join("cloud.ply"), &t)?;
+    let svg = out.join("trajectory.svg");
+    write_trajectory_svg(
+        &svg,
+        &t.trajectory,
+        t.sequence.groundtruth(),
+        t.eval.ate.as_ref(),
+        outs.plane,
+        &seq.display().to_string(),
+    )
+    .with_context(|| format!("writing {}", svg.display()))?;
+
+    let stages = StageStats::of(&t.run);
+    let summary = summary_json(seq, settings, &t, &stages, outs, cloud_points);
+    let summary_path = out.join("summary.json");
+    let text = serde_json::to_string_pretty(&summary)? + "\n";
+    std::fs::write(&summary_path, text)
+        .with_context(|| format!("writing {}", summary_path.display()))?;
+
+    print!("{}", human_summary(seq, &t, &stages, out));
+    Ok(())
+}
+
+fn summary_json(
+    seq: &Path,
+    settings: &TrackSettings,
+    t: &Tracked,
+    stages: &StageStats,
+    outs: &RunOutputs,
+    cloud_points: usize,
+) -> serde_json::Value {
+    let c = &t.run.counters;
+    let cam = t.sequence.camera();
+    let f = &t.config.filter;
+    json!({
+        "ecvo_version": env!("CARGO_PKG_VERSION"),
+        "sequence": seq.display().to_string(),
+        "mode": mode_name(settings.mode),
+        "preset": preset_name(settings.preset),
+        "levels": t.config.reference_levels.iter().map(|l| json!({
+            "max_distance_m": l.max_distance_m, "max_angle_deg": l.max_angle_deg,
+        })).collect::<Vec<_>>(),
+        "levels_text": levels_string(&t.config.reference_levels),
+        "filters": {
+            "bilateral": f.bilateral.is_some(),
+            "normal_max_angle_deg": f.normal_max_angle_deg,
+            "contour_angle_deg": f.contour_angle_deg,
+        },
+        "camera": {
+            "width": cam.width, "height": cam.height, "fx": cam.fx, "fy": cam.fy,
+            "cx": cam.cx, "cy": cam.cy, "depth_scale": cam.depth_scale,
+        },
+        "camera_file": settings.camera.as_ref().map(|p| p.display().to_string()),
+        "threads": t.run.threads,
+        "max_frames": settings.max_frames,
+        "frames": c.frames,
+        "motion_estimations": c.motion_estimations,
+        "references": c.references,
+        "lost_frames": c.lost_frames,
+        "failed_corrections": c.failed_corrections,
+        "reanchors": c.reanchors,
+        "ground_truth": t.sequence.groundtruth().is_some(),
+        "ate_rmse_m": t.eval.ate.as_ref().map(|a| a.rmse),
+        "ate": t.eval.ate_json(),
+        "rpe": t.eval.rpe_json(),
+        "ms_per_frame": stages,
+        "wall_time_s": t.run.wall_s,
+        "cloud": {
+            "points": cloud_points,
+            "frames": t.run.clouds.len(),
+            "pixel_stride": outs.cloud_stride,
+            "every_nth_frame": (settings.mode == Mode::Naive).then_some(outs.cloud_every),
+        },
+    })
+}
+
+/// The short report printed after a run.
+fn human_summary(seq: &Path, t: &Tracked, s: &StageStats, out: &Path) -> String {
+    let c = &t.run.counters;
+    let mut r = String::new();
+    let _ = writeln!(
+        r,
+        "{}: {} frames, levels {}",
+        seq.display(),
+        c.frames,
+        levels_string(&t.config.reference_levels)
+    );
+    match &t.eval.ate {
+        Some(a) => {
+            let _ = writeln!(r, "ATE RMSE: {:.4} m ({} poses)", a.rmse, a.count);
+        }
+        None => {
+            let _ = writeln!(r, "ATE RMSE: n/a (no ground truth)");
+        }
+    }
+    if let Some(p) = &t.eval.rpe_s {
+        let _ = writeln!(
+            r,
+            "RPE: {:.4} m/s, {:.3} deg/s",
+            p.trans.rmse, p.rot_deg.rmse
+        );
+    }
+    let refs: Vec<String> = c.references.iter().map(|n| n.to_string()).collect();
+    let _ = writeln!(
+        r,
+        "motion estimations: {}, references: {}, lost frames: {}",
+        c.motion_estimations,
+        if refs.is_empty() {
+            "-".to_string()
+        } else {
+            refs.join("/")
+        },
+        c.lost_frames
+    );
+    let _ = writeln!(
+        r,
+        "ms/frame (median/mean): filter {:.2}/{:.2}, tracker {:.2}/{:.2}, total {:.2}/{:.2}",
+        s.filter.median,
+        s.filter.mean,
+        s.tracker.median,
+        s.tracker.mean,
+        s.total.median,
+        s.total.mean
+    );
+    let _ = writeln!(r, "wrote {}", out.display());
+    r
+}
+
+/// `references.txt`: one line per frame that became a reference frame.
+fn write_references(path: &Path, t: &Tracked) -> Result<()> {
+    let mut text = String::from(
+        "# reference frames chosen by the tracker (the first frame, which anchors every level, is not listed)\n\
+         # timestamp tx ty tz qx qy qz qw level frame_index\n\
+         # level: highest level the frame became the reference of (a level-2 reference is also level 1)\n",
+    );
+    for o in t.run.outputs.iter().filter(|o| o.reference_levels > 0) {
+        let tr = &o.pose.translation.vector;
+        let q = o.pose.rotation.quaternion();
+        let _ = writeln!(
+            text,
+            "{} {} {} {} {} {} {} {} {} {}",
+            o.timestamp, tr.x, tr.y, tr.z, q.i, q.j, q.k, q.w, o.reference_levels, o.index
+        );
+    }
+    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+}
+
+/// `cloud.ply`: the selected frames' points in world coordinates; returns the number
+/// of points.
+fn write_cloud(path: &Path, t: &Tracked) -> Result<usize> {
+    let total: usize = t.run.clouds.iter().map(|c| c.points.len()).sum();
+    let mut points = Vec::with_capacity(total);
+    let mut normals = Vec::with_capacity(total);
+    let mut intensity = Vec::with_capacity(total);
+    for c in &t.run.clouds {
+        let Some(o) = t.run.outputs.get(c.index as usize) else {
+            continue;
+        };
+        if o.state == TrackingState::Lost {
+            continue;
+        }
+        let pose = o.pose.cast::<f32>();
+        for ((p, n), i) in c.points.iter().zip(&c.normals).zip(&c.intensity) {
+            let w = pose * ecvo_core::nalgebra::Point3::from(*p);
+            let nw = pose.rotation * ecvo_core::nalgebra::Vector3::from(*n);
+            points.push([w.x, w.y, w.z]);
+            normals.push([nw.x, nw.y, nw.z]);
+            intensity.push(*i);
+        }
+    }
+    ecvo_io::write_ply(path, &points, Some(&normals), Some(&intensity))?;
+    Ok(points.len())
+}

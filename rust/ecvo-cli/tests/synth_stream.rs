@@ -1,0 +1,270 @@
+//! `ecvo run` on the synthetic stream in `testdata/` (60 frames, 320x180, phone-like
+//! noise, exact ground truth), and the files it writes.
+
+mod common;
+
+use std::path::Path;
+
+use common::{check_counters, data_lines, run_ok, summary, temp_dir, testdata_stream};
+
+const FRAMES: u64 = 60;
+
+/// Runs `ecvo run` on the test stream with `extra` flags into a fresh folder.
+fn track(name: &str, extra: &[&str]) -> (std::path::PathBuf, serde_json::Value, String) {
+    let out = temp_dir(name);
+    let seq = testdata_stream();
+    let mut args = vec!["run", seq.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let o = run_ok(&args);
+    let stdout = String::from_utf8(o.stdout).unwrap();
+    let s = summary(&out);
+    (out, s, stdout)
+}
+
+// Measured on the testdata stream (engine of 2025-11, pc preset): naive 0.0012 m,
+// L1 0.0004 m, L2 0.0004 m. The bounds leave room for engine changes.
+const NAIVE_ATE_BOUND_M: f64 = 0.005;
+const L2_ATE_BOUND_M: f64 = 0.002;
+
+#[test]
+fn naive_tracks_the_stream() {
+    let (out, s, stdout) = track("naive", &["--mode", "naive"]);
+    let ate = s["ate_rmse_m"].as_f64().expect("ATE with ground truth");
+    assert!(ate < NAIVE_ATE_BOUND_M, "naive ATE {ate} m");
+    assert!(stdout.contains("ATE RMSE"), "{stdout}");
+    check_counters(&s, FRAMES, 0);
+    assert_eq!(s["motion_estimations"].as_u64(), Some(FRAMES - 1));
+    assert_eq!(s["mode"], "naive");
+    // Naive: no reference frames, the cloud takes every 15th frame (0, 15, 30, 45).
+    assert!(data_lines(&out.join("references.txt")).is_empty());
+    assert_eq!(s["cloud"]["frames"].as_u64(), Some(4), "{s}");
+    assert_eq!(s["cloud"]["every_nth_frame"].as_u64(), Some(15), "{s}");
+    check_files(&out, &s);
+}
+
+#[test]
+fn l2_tracks_the_stream_and_writes_every_file() {
+    let (out, s, stdout) = track("l2", &[]);
+    let ate = s["ate_rmse_m"].as_f64().expect("ATE with ground truth");
+    assert!(ate < L2_ATE_BOUND_M, "L2 ATE {ate} m");
+    assert!(stdout.contains("ATE RMSE"), "{stdout}");
+    check_counters(&s, FRAMES, 2);
+    let refs = s["references"].as_array().unwrap();
+    assert!(
+        refs[0].as_u64().unwrap() > 0,
+        "the stream moves enough for L1: {s}"
+    );
+    assert_eq!(s["mode"], "l2");
+    assert_eq!(s["preset"], "pc");
+    assert_eq!(s["levels_text"], "30mm:7deg,120mm:12deg");
+    check_files(&out, &s);
+}
+
+#[test]
+fn l1_levels_override_and_filter_flags() {
+    let (out, s, _) = track(
+        "l1",
+        &[
+            "--mode",
+            "l1",
+            "--levels",
+            "20mm:5deg",
+            "--no-bilateral",
+            "--no-contour-filter",
+            "--max-frames",
+            "45",
+            "--threads",
+            "3",
+        ],
+    );
+    check_counters(&s, 45, 1);
+    assert_eq!(s["levels"][0]["max_distance_m"].as_f64(), Some(0.02));
+    assert_eq!(s["levels"][0]["max_angle_deg"].as_f64(), Some(5.0));
+    assert_eq!(s["filters"]["bilateral"], false);
+    assert!(s["filters"]["contour_angle_deg"].is_null());
+    assert_eq!(s["filters"]["normal_max_angle_deg"].as_f64(), Some(28.0));
+    assert_eq!(s["threads"].as_u64(), Some(3));
+    assert!(s["ate_rmse_m"].as_f64().unwrap() < L2_ATE_BOUND_M, "{s}");
+    check_files(&out, &s);
+}
+
+#[test]
+fn phone_preset_and_camera_override() {
+    // The stream's own camera.json given with --camera gives the same result.
+    let cam = testdata_stream().join("camera.json");
+    let (_, s, _) = track(
+        "phone",
+        &[
+            "--preset",
+            "phone",
+            "--camera",
+            cam.to_str().unwrap(),
+            "--max-frames",
+            "30",
+        ],
+    );
+    check_counters(&s, 30, 2);
+    assert_eq!(s["preset"], "phone");
+    assert_eq!(s["levels_text"], "30mm:3deg,70mm:7deg");
+    assert_eq!(s["camera"]["fx"].as_f64(), Some(250.0));
+    assert!(s["camera_file"].as_str().unwrap().ends_with("camera.json"));
+    assert!(s["ate_rmse_m"].as_f64().unwrap() < L2_ATE_BOUND_M, "{s}");
+}
+
+#[test]
+fn eval_of_the_written_trajectory_agrees_with_the_summary() {
+    let (out, s, _) = track("eval", &["--max-frames", "40"]);
+    let gt = testdata_stream().join("groundtruth.txt");
+    let est = out.join("trajectory.txt");
+    let o = run_ok(&[
+        "eval",
+        gt.to_str().unwrap(),
+        est.to_str().unwrap(),
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("eval --json is JSON");
+    let a = v["ate_rmse_m"].as_f64().unwrap();
+    let b = s["ate_rmse_m"].as_f64().unwrap();
+    // The trajectory is written with round-trip precision.
+    assert!((a - b).abs() < 1e-12, "{a} vs {b}");
+    assert!(v["rpe"]["per_frame"]["trans_m"].as_f64().is_some(), "{v}");
+    assert!(v["rpe"]["trans_m_per_s"].as_f64().is_some(), "{v}");
+    let o = run_ok(&["eval", gt.to_str().unwrap(), est.to_str().unwrap()]);
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(text.contains("ATE RMSE") && text.contains("RPE"), "{text}");
+    // The ground truth against itself: zero error.
+    let o = run_ok(&["eval", gt.to_str().unwrap(), gt.to_str().unwrap(), "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["ate_rmse_m"].as_f64().unwrap() < 1e-9, "{v}");
+}
+
+#[test]
+fn table_prints_the_three_rows() {
+    let seq = testdata_stream();
+    let o = run_ok(&["table", seq.to_str().unwrap(), "--max-frames", "20"]);
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(
+        text.contains(
+            "| method | ATE RMSE (m) | motion estimations | references L1/L2 | ms per frame |"
+        ),
+        "{text}"
+    );
+    for row in ["| naive |", "| L1 |", "| L2 |"] {
+        assert_eq!(
+            text.lines().filter(|l| l.starts_with(row)).count(),
+            1,
+            "{text}"
+        );
+    }
+    let naive = text.lines().find(|l| l.starts_with("| naive |")).unwrap();
+    assert!(naive.contains("| 19 | - |"), "{naive}");
+}
+
+/// Checks the files of an `ecvo run` output folder against its summary.
+fn check_files(out: &Path, s: &serde_json::Value) {
+    for key in [
+        "frames",
+        "motion_estimations",
+        "references",
+        "lost_frames",
+        "ate_rmse_m",
+        "rpe",
+        "ms_per_frame",
+        "mode",
+        "preset",
+        "levels",
+        "camera",
+        "sequence",
+        "ecvo_version",
+        "threads",
+    ] {
+        assert!(s.get(key).is_some(), "summary.json lacks {key}: {s}");
+    }
+    for stage in ["filter", "tracker", "total"] {
+        for stat in ["median", "mean"] {
+            let v = s["ms_per_frame"][stage][stat].as_f64();
+            assert!(
+                v.is_some_and(|v| v > 0.0),
+                "ms_per_frame.{stage}.{stat}: {s}"
+            );
+        }
+    }
+    // RPE over 1 s needs more than a second of frames (every run here has 1.5 s).
+    assert!(s["rpe"]["trans_m_per_s"].as_f64().is_some(), "{s}");
+    assert!(s["rpe"]["rot_deg_per_s"].as_f64().is_some(), "{s}");
+    assert!(s["rpe"]["per_frame"]["trans_m"].as_f64().is_some(), "{s}");
+    let frames = s["frames"].as_u64().unwrap() as usize;
+
+    // trajectory.txt: one TUM line per frame, increasing stamps.
+    let traj = data_lines(&out.join("trajectory.txt"));
+    assert_eq!(traj.len(), frames);
+    let mut prev = f64::NEG_INFINITY;
+    for l in &traj {
+        let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+        assert_eq!(v.len(), 8, "{l}");
+        assert!(v[0] > prev, "{l}");
+        prev = v[0];
+    }
+
+    // references.txt: one line per level-1 reference, level column matching the counts.
+    let refs: Vec<u64> = s["references"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    let lines = data_lines(&out.join("references.txt"));
+    assert_eq!(lines.len() as u64, refs.first().copied().unwrap_or(0));
+    for (k, &count) in refs.iter().enumerate() {
+        let at_least = lines
+            .iter()
+            .filter(|l| {
+                let f: Vec<&str> = l.split_whitespace().collect();
+                assert_eq!(f.len(), 10, "{l}");
+                f[8].parse::<usize>().unwrap() > k
+            })
+            .count();
+        assert_eq!(at_least as u64, count, "level {}", k + 1);
+    }
+    for l in &lines {
+        // The reference's pose is its pose in trajectory.txt.
+        let f: Vec<&str> = l.split_whitespace().collect();
+        let index: usize = f[9].parse().unwrap();
+        let t: Vec<&str> = traj[index].split_whitespace().collect();
+        assert_eq!(&f[..8], &t[..8], "{l}");
+    }
+
+    // cloud.ply: a valid binary header whose vertex count matches the file size.
+    let ply = std::fs::read(out.join("cloud.ply")).unwrap();
+    let end = b"end_header\n";
+    let pos = ply
+        .windows(end.len())
+        .position(|w| w == end)
+        .expect("PLY header ends");
+    let header = std::str::from_utf8(&ply[..pos]).unwrap();
+    assert!(
+        header.starts_with("ply\nformat binary_little_endian 1.0\n"),
+        "{header}"
+    );
+    let n: usize = header
+        .lines()
+        .find_map(|l| l.strip_prefix("element vertex "))
+        .expect("vertex count")
+        .parse()
+        .unwrap();
+    for p in ["x", "y", "z", "nx", "ny", "nz"] {
+        assert!(
+            header.contains(&format!("property float {p}\n")),
+            "{header}"
+        );
+    }
+    assert!(header.contains("property uchar red\n"), "{header}");
+    assert!(n > 1000, "{n} points");
+    assert_eq!(n as u64, s["cloud"]["points"].as_u64().unwrap());
+    assert_eq!(ply.len() - pos - end.len(), n * (6 * 4 + 3));
+
+    // trajectory.svg: an SVG with both panels.
+    let svg = std::fs::read_to_string(out.join("trajectory.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert!(svg.contains("ATE error over time") && svg.contains("ground truth"));
+}
