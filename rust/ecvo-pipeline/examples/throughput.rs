@@ -1,0 +1,218 @@
+//! Throughput of the pipeline against the sequential engine on a TUM stream.
+//!
+//! Decodes the frames into memory first, then times tracking all of them with
+//! `ecvo_core::Odometry` (sequential) and with the offline `Pipeline`, alternating
+//! the two `--repeat` times, prints frames per second (median over the repeats), the
+//! ratio, the pipeline's stage times, and checks that both give the same poses bit
+//! for bit (exit status 1 if not).
+//!
+//! ```text
+//! cargo run --release -p ecvo-pipeline --example throughput -- tum_fr1_xyz_half
+//! cargo run --release -p ecvo-pipeline --example throughput -- tum_fr1_xyz_full300 --threads 2 --repeat 3
+//! # one engine only (to time whole processes from outside):
+//! cargo run --release -p ecvo-pipeline --example throughput -- tum_fr1_xyz_half --only pipeline
+//! ```
+//!
+//! The dataset is a folder name under the shared datasets folder (see
+//! `ecvo_io::datasets_dir`) or a path.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use ecvo_core::{Config, Mode, Odometry, Pose, Preset};
+use ecvo_pipeline::{Pipeline, PipelineOptions, PipelineStats};
+
+struct Args {
+    dataset: String,
+    frames: Option<usize>,
+    threads: usize,
+    repeat: usize,
+    only: Option<String>,
+    mode: Mode,
+}
+
+fn parse() -> Result<Args, String> {
+    let mut a = Args {
+        dataset: String::new(),
+        frames: None,
+        threads: 2,
+        repeat: 1,
+        only: None,
+        mode: Mode::L2,
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(arg) = it.next() {
+        let mut value = |name: &str| it.next().ok_or(format!("{name} needs a value"));
+        match arg.as_str() {
+            "--frames" => a.frames = Some(value("--frames")?.parse().map_err(|e| format!("{e}"))?),
+            "--threads" => a.threads = value("--threads")?.parse().map_err(|e| format!("{e}"))?,
+            "--repeat" => a.repeat = value("--repeat")?.parse().map_err(|e| format!("{e}"))?,
+            "--only" => a.only = Some(value("--only")?),
+            "--mode" => a.mode = value("--mode")?.parse().map_err(|e| format!("{e}"))?,
+            "-h" | "--help" => {
+                return Err(
+                    "usage: throughput DATASET [--frames N] [--threads T] [--repeat R] \
+                            [--only pipeline|sequential] [--mode naive|l1|l2]"
+                        .into(),
+                );
+            }
+            s if a.dataset.is_empty() && !s.starts_with('-') => a.dataset = s.to_string(),
+            s => return Err(format!("unknown argument `{s}`")),
+        }
+    }
+    if a.dataset.is_empty() {
+        return Err("give a dataset (e.g. tum_fr1_xyz_half)".into());
+    }
+    if let Some(o) = &a.only
+        && o != "pipeline"
+        && o != "sequential"
+    {
+        return Err(format!("--only {o}: expected pipeline or sequential"));
+    }
+    a.repeat = a.repeat.max(1);
+    Ok(a)
+}
+
+fn sequential(config: &Config, frames: &[ecvo_io::Frame]) -> (f64, Vec<Pose>) {
+    let mut odo = Odometry::new(config.clone()).expect("valid config");
+    let t0 = Instant::now();
+    let poses = frames
+        .iter()
+        .map(|f| odo.push(f.view()).expect("frame matches camera").pose)
+        .collect();
+    (t0.elapsed().as_secs_f64(), poses)
+}
+
+fn pipeline(
+    config: &Config,
+    frames: &[ecvo_io::Frame],
+    threads: usize,
+) -> (f64, Vec<Pose>, PipelineStats) {
+    let p = Pipeline::new(
+        config.clone(),
+        PipelineOptions {
+            threads,
+            keep_trajectory: true,
+            ..PipelineOptions::default()
+        },
+    )
+    .expect("valid config");
+    let t0 = Instant::now();
+    for f in frames {
+        p.push_view(f.view()).expect("frame accepted");
+    }
+    p.flush().expect("pipeline ran");
+    let secs = t0.elapsed().as_secs_f64();
+    let summary = p.finish().expect("pipeline ran");
+    let poses = summary.trajectory.iter().map(|r| r.pose).collect();
+    (secs, poses, summary.stats)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn same(a: &[Pose], b: &[Pose]) -> bool {
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(x, y)| {
+            x.to_homogeneous()
+                .iter()
+                .zip(y.to_homogeneous().iter())
+                .all(|(p, q)| p.to_bits() == q.to_bits())
+        })
+}
+
+fn main() -> ExitCode {
+    let args = match parse() {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::from(2);
+        }
+    };
+    let dir = ecvo_io::dataset(&args.dataset).unwrap_or_else(|| PathBuf::from(&args.dataset));
+    let seq = match ecvo_io::Sequence::open(&dir, None) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{}: {e}", dir.display());
+            return ExitCode::from(2);
+        }
+    };
+    let n = args.frames.unwrap_or(seq.len()).min(seq.len());
+    let t0 = Instant::now();
+    let frames: Vec<ecvo_io::Frame> = (0..n)
+        .map(|i| seq.load_frame(i).expect("frame decodes"))
+        .collect();
+    let cam = seq.camera();
+    println!(
+        "{}: {n} frames {}x{} decoded in {:.1} s; mode {:?}, {} compute threads, {} cores",
+        args.dataset,
+        cam.width,
+        cam.height,
+        t0.elapsed().as_secs_f64(),
+        args.mode,
+        args.threads,
+        std::thread::available_parallelism().map_or(0, |c| c.get()),
+    );
+    let config = Config::new(*cam, Preset::Pc, args.mode);
+
+    let (mut seq_fps, mut pipe_fps) = (Vec::new(), Vec::new());
+    let (mut seq_poses, mut pipe_poses, mut stats) = (None, None, None);
+    for _ in 0..args.repeat {
+        if args.only.as_deref() != Some("pipeline") {
+            let (secs, poses) = sequential(&config, &frames);
+            seq_fps.push(n as f64 / secs);
+            seq_poses = Some(poses);
+        }
+        if args.only.as_deref() != Some("sequential") {
+            let (secs, poses, st) = pipeline(&config, &frames, args.threads);
+            pipe_fps.push(n as f64 / secs);
+            pipe_poses = Some(poses);
+            stats = Some(st);
+        }
+    }
+    if !seq_fps.is_empty() {
+        println!(
+            "sequential Odometry: {:7.2} frames/s (median of {})",
+            median(seq_fps.clone()),
+            seq_fps.len()
+        );
+    }
+    if let Some(st) = &stats {
+        println!(
+            "pipeline (offline):  {:7.2} frames/s (median of {})",
+            median(pipe_fps.clone()),
+            pipe_fps.len()
+        );
+        println!(
+            "  per frame: filter {:.2} ms (median {:.2}), tracker {:.2} ms (median {:.2}), \
+             total {:.2} ms; queues max input {} tracker {}; motion estimations {}, references {:?}",
+            st.filter.mean_ms,
+            st.filter.median_ms,
+            st.tracker.mean_ms,
+            st.tracker.median_ms,
+            st.wall_ms_per_frame,
+            st.input_queue.max_depth,
+            st.tracker_queue.max_depth,
+            st.counters.motion_estimations,
+            st.counters.references,
+        );
+    }
+    if !seq_fps.is_empty() && !pipe_fps.is_empty() {
+        println!(
+            "ratio pipeline/sequential: {:.2}x",
+            median(pipe_fps) / median(seq_fps)
+        );
+        let identical = same(
+            seq_poses.as_deref().unwrap_or_default(),
+            pipe_poses.as_deref().unwrap_or_default(),
+        );
+        println!("poses identical bit for bit: {identical}");
+        if !identical {
+            return ExitCode::FAILURE;
+        }
+    }
+    ExitCode::SUCCESS
+}

@@ -1,0 +1,127 @@
+//! A warm pipeline allocates nothing per frame: a counting global allocator watches
+//! frames 20..60 of an offline run after a warm-up of 20 frames.
+//!
+//! The one allocation that remains is rayon's, not ours: handing a job to a
+//! `rayon::ThreadPool` from outside it (`install`, as the stages do once per frame)
+//! goes through the pool's injector queue, which allocates one fixed-size block per 63
+//! jobs and frees it when they have run (about one 1.5 kB block every 25 frames). The
+//! test checks that every allocation in the window is such a block, and that there are
+//! no more of them than the jobs injected call for; everything else allocates nothing.
+//!
+//! Scope: `push` (copying into pooled raw buffers), the input, tracker and geometry
+//! queues, the filter stage (`Preparer::prepare_into` into pooled frames), the
+//! tracker stage (`Tracker::track`, latest pose, counters, statistics) and the
+//! geometry stage with a voxel grid (its storage is reserved for `max_points` when
+//! the pipeline starts), with 2 compute threads. Not in scope: the optional
+//! trajectory and outputs channel (off here; they grow or queue per frame by
+//! design), and `stats()` snapshots (they copy the counters).
+
+mod common;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+use ecvo_pipeline::{GeometryOptions, Pipeline, PipelineOptions};
+
+/// Size of a block of crossbeam-deque's `Injector<rayon_core::JobRef>`: 63 slots of a
+/// two-pointer job reference and a state word, plus the link to the next block.
+const INJECTOR_BLOCK: usize = 63 * 3 * std::mem::size_of::<usize>() + std::mem::size_of::<usize>();
+
+struct Counting;
+
+static COUNTING: AtomicBool = AtomicBool::new(false);
+static ALLOCS: AtomicU64 = AtomicU64::new(0);
+static SIZES: Mutex<[usize; 64]> = Mutex::new([0; 64]);
+
+fn note(size: usize) {
+    if COUNTING.load(Ordering::Relaxed) {
+        let n = ALLOCS.fetch_add(1, Ordering::Relaxed) as usize;
+        if n < 64
+            && let Ok(mut s) = SIZES.try_lock()
+        {
+            s[n] = size;
+        }
+    }
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note(layout.size());
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        note(layout.size());
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note(new_size);
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn warm_pipeline_does_not_allocate_per_frame() {
+    let (config, frames) = common::synthetic(60, 7);
+    let pipeline = Pipeline::new(
+        config,
+        PipelineOptions {
+            threads: 2,
+            geometry: Some(GeometryOptions {
+                voxel_size_m: Some(0.01),
+                max_points: 300_000,
+                point_stride: 2,
+            }),
+            ..PipelineOptions::default()
+        },
+    )
+    .unwrap();
+    let push = |f: &common::Frame| {
+        pipeline
+            .push(f.timestamp, |i, d| {
+                i.copy_from_slice(&f.intensity);
+                d.copy_from_slice(&f.depth);
+            })
+            .unwrap();
+    };
+    for f in &frames[..20] {
+        push(f);
+    }
+    pipeline.flush().unwrap();
+
+    let geometry_before = pipeline.stats().geometry.frames;
+    COUNTING.store(true, Ordering::SeqCst);
+    for f in &frames[20..] {
+        push(f);
+    }
+    pipeline.flush().unwrap();
+    COUNTING.store(false, Ordering::SeqCst);
+
+    let allocs = ALLOCS.load(Ordering::SeqCst);
+    let sizes = *SIZES.lock().unwrap();
+    let stats = pipeline.stats();
+    // Jobs handed to the pool in the window: one per frame for the filter and for the
+    // tracker, one per reference frame for the geometry stage. The injector needs a
+    // new block every 63 jobs; two stage threads racing for the last slot of a block
+    // may both allocate one (the loser frees its copy), hence at most two per 63.
+    let jobs = 2 * 40 + (stats.geometry.frames - geometry_before);
+    let summary = pipeline.finish().unwrap();
+    assert_eq!(summary.stats.tracked, 60);
+    assert!(stats.counters.references.iter().sum::<u64>() > 0);
+    assert!(stats.cloud_points > 0);
+    let seen = &sizes[..(allocs as usize).min(64)];
+    assert!(
+        seen.iter().all(|&s| s == INJECTOR_BLOCK) && allocs <= 2 * jobs.div_ceil(63),
+        "{allocs} allocations over frames 20..60 ({jobs} jobs injected), sizes {seen:?}; \
+         only rayon injector blocks of {INJECTOR_BLOCK} bytes are expected"
+    );
+    eprintln!(
+        "frames 20..60: {allocs} allocations, all rayon injector blocks ({jobs} jobs injected)"
+    );
+}

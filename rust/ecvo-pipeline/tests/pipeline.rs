@@ -1,0 +1,339 @@
+//! The pipeline against the sequential engine, its frame pool, its concurrent
+//! read-outs and its real-data behaviour.
+
+mod common;
+
+use std::collections::HashSet;
+use std::sync::OnceLock;
+
+use ecvo_core::{Config, FrameOutput, Odometry};
+use ecvo_pipeline::{
+    Admission, Error, GeometryOptions, Pipeline, PipelineOptions, PushStatus, TrackedFrame,
+};
+
+fn stream() -> &'static (Config, Vec<common::Frame>) {
+    static S: OnceLock<(Config, Vec<common::Frame>)> = OnceLock::new();
+    S.get_or_init(|| common::synthetic(60, 11))
+}
+
+fn sequential(config: &Config, frames: &[common::Frame]) -> (Vec<FrameOutput>, Odometry) {
+    let mut odo = Odometry::new(config.clone()).unwrap();
+    let outs = frames.iter().map(|f| odo.push(f.view()).unwrap()).collect();
+    (outs, odo)
+}
+
+#[test]
+fn offline_poses_equal_sequential_odometry_bit_for_bit_at_1_2_and_4_threads() {
+    let (config, frames) = stream();
+    let (expected, odo) = sequential(config, frames);
+    assert!(
+        odo.tracker().counters().references.iter().sum::<u64>() > 0,
+        "the stream must exercise error correction"
+    );
+    for threads in [1, 2, 4] {
+        let pipeline = Pipeline::new(
+            config.clone(),
+            PipelineOptions {
+                threads,
+                geometry: Some(GeometryOptions::default()),
+                keep_trajectory: true,
+                output_queue: Some(4),
+                ..PipelineOptions::default()
+            },
+        )
+        .unwrap();
+        let rx = pipeline.outputs().unwrap();
+        let outputs: Vec<TrackedFrame> = std::thread::scope(|s| {
+            let consumer = s.spawn(move || rx.iter().collect::<Vec<_>>());
+            for f in frames {
+                assert_eq!(pipeline.push_view(f.view()).unwrap(), PushStatus::Accepted);
+            }
+            pipeline.close_input();
+            consumer.join().unwrap()
+        });
+        let summary = pipeline.finish().unwrap();
+        assert_eq!(outputs.len(), frames.len(), "{threads} threads");
+        assert_eq!(summary.trajectory.len(), frames.len());
+        for (i, ((got, rec), want)) in outputs
+            .iter()
+            .zip(&summary.trajectory)
+            .zip(&expected)
+            .enumerate()
+        {
+            assert_eq!(got.sequence, i as u64);
+            assert_eq!(got.output.index, want.index);
+            assert_eq!(
+                common::bits(&got.output.pose),
+                common::bits(&want.pose),
+                "frame {i}, {threads} threads"
+            );
+            assert_eq!(common::bits(&rec.pose), common::bits(&want.pose));
+            assert_eq!(got.output.state, want.state);
+            assert_eq!(got.output.reference_levels, want.reference_levels);
+            assert_eq!(got.output.motion_estimations, want.motion_estimations);
+        }
+        assert_eq!(&summary.stats.counters, odo.tracker().counters());
+        assert_eq!(summary.stats.tracked, frames.len() as u64);
+        assert_eq!(summary.stats.dropped, 0);
+        // References: the first frame and every frame that became one.
+        let refs: Vec<u64> = summary.references.iter().map(|r| r.index).collect();
+        let want_refs: Vec<u64> = expected
+            .iter()
+            .filter(|o| o.index == 0 || o.reference_levels > 0)
+            .map(|o| o.index)
+            .collect();
+        assert_eq!(refs, want_refs);
+        assert_eq!(summary.stats.geometry.frames, want_refs.len() as u64);
+        assert!(!summary.cloud.is_empty());
+        assert_eq!(summary.stats.filter.frames, frames.len() as u64);
+        assert!(summary.stats.filter.median_ms > 0.0 && summary.stats.tracker.mean_ms > 0.0);
+        assert_eq!(
+            summary.stats.frame_pool.in_use, 0,
+            "every frame back in the pool"
+        );
+    }
+}
+
+/// Distinct frames the tracker holds after `outs`: the previous frame and the
+/// reference of each level.
+fn held_by_tracker(outs: &[FrameOutput], levels: usize) -> usize {
+    let mut refs = vec![None; levels];
+    for o in outs {
+        if o.index == 0 || o.reanchored {
+            refs.iter_mut().for_each(|r| *r = Some(o.index));
+        }
+        for r in refs.iter_mut().take(o.reference_levels as usize) {
+            *r = Some(o.index);
+        }
+    }
+    let mut held: HashSet<u64> = refs.into_iter().flatten().collect();
+    if let Some(last) = outs.last() {
+        held.insert(last.index);
+    }
+    held.len()
+}
+
+#[test]
+fn a_reference_frame_lives_exactly_as_long_as_it_is_a_reference() {
+    let (config, frames) = stream();
+    let (expected, _) = sequential(config, frames);
+    let levels = config.reference_levels.len();
+    let queue = 2;
+    let pipeline = Pipeline::new(
+        config.clone(),
+        PipelineOptions {
+            queue_capacity: queue,
+            ..PipelineOptions::default()
+        },
+    )
+    .unwrap();
+    for (i, f) in frames.iter().enumerate() {
+        pipeline.push_view(f.view()).unwrap();
+        pipeline.flush().unwrap();
+        let pool = pipeline.stats().frame_pool;
+        // Once a frame is tracked, the only prepared frames alive are the ones the
+        // tracker keeps: the previous frame and the current references.
+        assert_eq!(
+            pool.in_use,
+            held_by_tracker(&expected[..=i], levels),
+            "frame {i}"
+        );
+    }
+    // Streaming at full speed: bounded by the levels and the queue depth.
+    for f in frames {
+        pipeline.push_view(f.view()).unwrap();
+    }
+    let summary = pipeline.finish().unwrap();
+    let pool = summary.stats.frame_pool;
+    let bound = levels + 1 + 1 + queue + 1;
+    assert_eq!(pool.capacity, bound);
+    assert!(
+        pool.allocated <= bound && pool.max_in_use <= bound,
+        "{pool:?}"
+    );
+    assert_eq!(pool.in_use, 0);
+    assert!(summary.stats.tracker_queue.max_depth <= queue);
+    assert!(summary.stats.input_queue.max_depth <= queue);
+}
+
+#[test]
+fn ui_reads_latest_pose_stats_and_cloud_while_frames_stream() {
+    let (config, frames) = stream();
+    let geometry = GeometryOptions {
+        voxel_size_m: Some(0.02),
+        max_points: 20_000,
+        point_stride: 2,
+    };
+    let pipeline = Pipeline::new(
+        config.clone(),
+        PipelineOptions {
+            geometry: Some(geometry),
+            keep_trajectory: true,
+            ..PipelineOptions::default()
+        },
+    )
+    .unwrap();
+    let done = std::sync::atomic::AtomicBool::new(false);
+    std::thread::scope(|s| {
+        let ui = s.spawn(|| {
+            let (mut last_tracked, mut last_cloud, mut reads) = (0, 0, 0);
+            let mut cloud = Vec::new();
+            while !done.load(std::sync::atomic::Ordering::Acquire) {
+                let l = pipeline.latest();
+                assert!(l.tracked >= last_tracked);
+                last_tracked = l.tracked;
+                let n = pipeline.cloud_snapshot_into(cloud.len(), &mut cloud);
+                assert!(n >= last_cloud && n == cloud.len());
+                last_cloud = n;
+                let st = pipeline.stats();
+                assert!(st.tracked <= st.pushed);
+                reads += 1;
+                std::thread::yield_now();
+            }
+            (reads, cloud)
+        });
+        for f in frames {
+            pipeline.push_view(f.view()).unwrap();
+        }
+        pipeline.flush().unwrap();
+        done.store(true, std::sync::atomic::Ordering::Release);
+        let (reads, incremental) = ui.join().unwrap();
+        assert!(reads > 0);
+        let full = pipeline.cloud_snapshot();
+        assert!(incremental.len() <= full.len());
+        assert_eq!(incremental[..], full[..incremental.len()]);
+    });
+    let latest = pipeline.latest();
+    assert_eq!(latest.tracked, frames.len() as u64);
+    assert_eq!(latest.sequence, frames.len() as u64 - 1);
+    assert_eq!(latest.timestamp, frames.last().unwrap().timestamp);
+    let summary = pipeline.finish().unwrap();
+    assert_eq!(latest.pose, summary.trajectory.last().unwrap().pose);
+    // One point per 2 cm voxel, never more than the cap.
+    let cloud = &summary.cloud;
+    assert!(!cloud.is_empty() && cloud.len() <= geometry.max_points);
+    let voxels: HashSet<_> = cloud
+        .iter()
+        .map(|p| p.position.map(|c| (c / 0.02).floor() as i32))
+        .collect();
+    assert_eq!(voxels.len(), cloud.len());
+}
+
+#[test]
+fn live_mode_drops_the_oldest_frames_and_counts_them() {
+    let (config, frames) = stream();
+    let pipeline = Pipeline::new(
+        config.clone(),
+        PipelineOptions {
+            admission: Admission::Live,
+            queue_capacity: 1,
+            keep_trajectory: true,
+            ..PipelineOptions::default()
+        },
+    )
+    .unwrap();
+    // A camera far faster than the tracker: every push returns at once.
+    let mut dropped_status = 0;
+    for f in frames {
+        if pipeline.push_view(f.view()).unwrap() == PushStatus::DroppedOldest {
+            dropped_status += 1;
+        }
+    }
+    pipeline.flush().unwrap();
+    let summary = pipeline.finish().unwrap();
+    let st = &summary.stats;
+    assert_eq!(st.pushed, frames.len() as u64);
+    assert!(st.dropped > 0, "{st:?}");
+    assert_eq!(st.tracked + st.dropped, st.pushed);
+    assert!(dropped_status as u64 <= st.dropped_at_input);
+    assert!(st.input_queue.max_depth <= 1 && st.tracker_queue.max_depth <= 1);
+    // Tracked frames are in push order, the newest is always tracked.
+    let seq: Vec<u64> = summary.trajectory.iter().map(|r| r.sequence).collect();
+    assert!(seq.windows(2).all(|w| w[0] < w[1]));
+    assert_eq!(*seq.last().unwrap(), frames.len() as u64 - 1);
+}
+
+#[test]
+fn bad_frames_and_options_are_errors() {
+    let (config, frames) = stream();
+    assert!(matches!(
+        Pipeline::new(
+            config.clone(),
+            PipelineOptions {
+                threads: 0,
+                ..PipelineOptions::default()
+            }
+        ),
+        Err(Error::InvalidOptions {
+            field: "threads",
+            ..
+        })
+    ));
+    assert!(matches!(
+        Pipeline::new(
+            config.clone(),
+            PipelineOptions {
+                geometry: Some(GeometryOptions {
+                    voxel_size_m: Some(-1.0),
+                    ..GeometryOptions::default()
+                }),
+                ..PipelineOptions::default()
+            }
+        ),
+        Err(Error::InvalidOptions {
+            field: "geometry.voxel_size_m",
+            ..
+        })
+    ));
+    let mut bad = config.clone();
+    bad.camera.fx = f64::NAN;
+    assert!(matches!(
+        Pipeline::new(bad, PipelineOptions::default()),
+        Err(Error::Core(_))
+    ));
+    let pipeline = Pipeline::new(config.clone(), PipelineOptions::default()).unwrap();
+    let f = &frames[0];
+    let short = ecvo_core::FrameView {
+        depth: &f.depth[1..],
+        ..f.view()
+    };
+    assert!(matches!(pipeline.push_view(short), Err(Error::Core(_))));
+    assert!(matches!(
+        pipeline.push(f64::NAN, |_, _| {}),
+        Err(Error::Core(_))
+    ));
+    pipeline.push_view(f.view()).unwrap();
+    pipeline.close_input();
+    assert_eq!(pipeline.push_view(f.view()), Err(Error::Closed));
+    assert_eq!(pipeline.finish().unwrap().stats.tracked, 1);
+}
+
+#[test]
+fn real_tum_stream_matches_sequential_odometry() {
+    let Some(dir) = ecvo_io::dataset_for_test("tum_fr1_xyz_half") else {
+        return;
+    };
+    let seq = ecvo_io::Sequence::open(&dir, None).unwrap();
+    let frames: Vec<ecvo_io::Frame> = (0..40).map(|i| seq.load_frame(i).unwrap()).collect();
+    let config = Config::new(*seq.camera(), ecvo_core::Preset::Pc, ecvo_core::Mode::L2);
+    let mut odo = Odometry::new(config.clone()).unwrap();
+    let expected: Vec<_> = frames.iter().map(|f| odo.push(f.view()).unwrap()).collect();
+    let pipeline = Pipeline::new(
+        config,
+        PipelineOptions {
+            keep_trajectory: true,
+            geometry: Some(GeometryOptions::default()),
+            ..PipelineOptions::default()
+        },
+    )
+    .unwrap();
+    for f in &frames {
+        pipeline.push_view(f.view()).unwrap();
+    }
+    let summary = pipeline.finish().unwrap();
+    assert_eq!(summary.trajectory.len(), expected.len());
+    for (r, e) in summary.trajectory.iter().zip(&expected) {
+        assert_eq!(common::bits(&r.pose), common::bits(&e.pose));
+    }
+    assert_eq!(&summary.stats.counters, odo.tracker().counters());
+}
