@@ -1,0 +1,103 @@
+// :app — the Android application: replays a recorded stream or tracks live from a DEPTH16
+// camera and draws the trajectory. Everything that can be plain Kotlin lives in :shared.
+plugins {
+    alias(libs.plugins.android.application)
+    alias(libs.plugins.kotlin.android)
+}
+
+/** The ABIs libecvo_jni is built for (by cargo-ndk) and packaged for. */
+val ecvoAbis = listOf("arm64-v8a", "armeabi-v7a", "x86_64")
+val jniLibsDir = layout.projectDirectory.dir("src/main/jniLibs") // generated, git-ignored
+
+android {
+    namespace = "io.ecvo.app"
+    compileSdk = libs.versions.compileSdk.get().toInt()
+    ndkVersion = libs.versions.ndk.get()
+
+    defaultConfig {
+        applicationId = "io.ecvo.app"
+        minSdk = libs.versions.minSdk.get().toInt()
+        targetSdk = libs.versions.targetSdk.get().toInt()
+        versionCode = 1
+        versionName = "0.1.0"
+        ndk {
+            abiFilters += ecvoAbis
+        }
+    }
+
+    buildTypes {
+        release {
+            isMinifyEnabled = false
+            // Signed with the debug key so that a release build installs for testing; use a
+            // real signing config to publish.
+            signingConfig = signingConfigs.getByName("debug")
+        }
+    }
+
+    compileOptions {
+        sourceCompatibility = JavaVersion.VERSION_17
+        targetCompatibility = JavaVersion.VERSION_17
+    }
+
+    sourceSets {
+        getByName("main") {
+            jniLibs.srcDir(jniLibsDir)
+            // The sample stream (written by ecvo-synth, see testdata/README.md) is bundled at
+            // the root of the APK's assets: camera.json, rgb.txt, depth.txt, rgb/, depth/.
+            assets.srcDir(rootProject.layout.projectDirectory.dir("testdata/synth_phone_320x180"))
+        }
+    }
+
+    packaging {
+        jniLibs {
+            // Keep the .so files uncompressed and page-aligned in the APK, loaded in place.
+            useLegacyPackaging = false
+        }
+    }
+
+    androidResources {
+        // The sample's PNGs are already compressed.
+        noCompress += listOf("png")
+    }
+}
+
+kotlin {
+    jvmToolchain(libs.versions.jvmTarget.get().toInt())
+}
+
+dependencies {
+    implementation(project(":tracker"))
+    implementation(project(":shared"))
+    implementation(libs.androidx.core.ktx)
+    implementation(libs.androidx.appcompat)
+    implementation(libs.androidx.activity.ktx)
+}
+
+/**
+ * Builds libecvo_jni for every ABI into src/main/jniLibs with scripts/build-android.sh
+ * (cargo-ndk; needs ANDROID_NDK_HOME, cargo-ndk and the rustup targets). Skip it with
+ * -Pecvo.skipRustBuild=true to package libraries built beforehand.
+ */
+val skipRustBuild = providers.gradleProperty("ecvo.skipRustBuild").map { it.toBoolean() }.orElse(false)
+val buildRustLibraries by tasks.registering(Exec::class) {
+    group = "build"
+    description = "Builds libecvo_jni.so with cargo-ndk for ${ecvoAbis.joinToString()}"
+    val root = rootProject.layout.projectDirectory
+    onlyIf { !skipRustBuild.get() }
+    workingDir = root.asFile
+    commandLine(
+        "bash", root.file("scripts/build-android.sh").asFile.path,
+        "-P", libs.versions.minSdk.get(),
+        "-o", jniLibsDir.asFile.path,
+        *ecvoAbis.flatMap { listOf("-t", it) }.toTypedArray(),
+    )
+    // cargo decides what to rebuild; these let Gradle skip the task when nothing changed.
+    inputs.files(root.file("Cargo.toml"), root.file("Cargo.lock"), root.file("scripts/build-android.sh"))
+    inputs.files(fileTree(root.dir("rust")) { include("**/*.rs", "**/Cargo.toml") })
+    inputs.property("abis", ecvoAbis)
+    outputs.dir(jniLibsDir)
+}
+
+tasks.named("preBuild") {
+    dependsOn(buildRustLibraries)
+}

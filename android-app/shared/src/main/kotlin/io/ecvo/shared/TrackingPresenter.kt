@@ -1,0 +1,133 @@
+package io.ecvo.shared
+
+import io.ecvo.TrackerStats
+import io.ecvo.TrackingState
+import java.util.Locale
+
+/** Where frames come from. */
+enum class FrameSource { NONE, REPLAY, LIVE }
+
+/** Colour class of the state label. */
+enum class StatusKind { IDLE, INITIALISING, TRACKING, LOST, ERROR }
+
+/** What the status area shows, as ready-to-display English text. */
+data class StatusText(
+    /** "Stopped", "Initialising", "Tracking", "Lost", "Error". */
+    val state: String,
+    val kind: StatusKind,
+    /** "12.3 ms/frame" or "– ms/frame" before the first tracked frame. */
+    val timing: String,
+    /** "refs L1 12 · L2 3". */
+    val references: String,
+    /** "120 frames · 3 dropped · 1 lost". */
+    val frames: String,
+    /** A sentence the user should read (no depth camera, permission denied, stalled, error), or null. */
+    val message: String?,
+    /** Whether the "live" start button should be enabled. */
+    val canStartLive: Boolean,
+    /** Whether frames are being recorded. */
+    val recording: Boolean,
+)
+
+/**
+ * Turns what the tracker and the camera say into what the UI shows. Plain state, no
+ * Android: the activity forwards events and renders [status].
+ *
+ * Not thread-safe: call it from the UI thread.
+ */
+class TrackingPresenter(
+    /** A running source with no new pose for this long (wall clock) is reported as stalled. */
+    private val stallAfterNs: Long = 2_000_000_000L,
+) {
+    private var source = FrameSource.NONE
+    private var depthCamera: Boolean? = null
+    private var permissionDenied = false
+    private var recording = false
+    private var error: String? = null
+    private var state = TrackingState.INITIALISING
+    private var stats = TrackerStats.EMPTY
+    private var lastPoseNs = Long.MIN_VALUE
+    private var lastPoseChangeWallNs = 0L
+    private var stalled = false
+
+    /** The result of looking for a camera with DEPTH_OUTPUT. */
+    fun onDepthCameraChecked(available: Boolean) { depthCamera = available }
+
+    /** The answer to the camera permission request. */
+    fun onCameraPermission(granted: Boolean) { permissionDenied = !granted }
+
+    /** A source started at wall-clock [nowNs]; clears the previous run's error and numbers. */
+    fun onStarted(src: FrameSource, nowNs: Long) {
+        source = src
+        error = null
+        state = TrackingState.INITIALISING
+        stats = TrackerStats.EMPTY
+        lastPoseNs = Long.MIN_VALUE
+        lastPoseChangeWallNs = nowNs
+        stalled = false
+    }
+
+    /** The source stopped (button, end of a replay); the last numbers stay visible. */
+    fun onStopped() {
+        source = FrameSource.NONE
+        stalled = false
+    }
+
+    /** Something failed (the message of an exception); shown until the next start. */
+    fun onError(message: String) {
+        error = message
+        source = FrameSource.NONE
+    }
+
+    /** Recording switched on or off. */
+    fun onRecording(on: Boolean) { recording = on }
+
+    /**
+     * A poll of the tracker at wall-clock [nowNs] (monotonic): its [state], [stats] and
+     * the timestamp `getPose` returned ([poseTimestampNs], `Tracker.NO_POSE` if none).
+     */
+    fun onTrackerUpdate(state: TrackingState, stats: TrackerStats, poseTimestampNs: Long, nowNs: Long) {
+        this.state = state
+        this.stats = stats
+        if (poseTimestampNs != lastPoseNs) {
+            lastPoseNs = poseTimestampNs
+            lastPoseChangeWallNs = nowNs
+        }
+        stalled = source != FrameSource.NONE && nowNs - lastPoseChangeWallNs > stallAfterNs
+    }
+
+    /** What to show now. */
+    val status: StatusText
+        get() {
+            val (label, kind) = when {
+                error != null -> "Error" to StatusKind.ERROR
+                source == FrameSource.NONE -> "Stopped" to StatusKind.IDLE
+                state == TrackingState.INITIALISING -> "Initialising" to StatusKind.INITIALISING
+                state == TrackingState.TRACKING -> "Tracking" to StatusKind.TRACKING
+                else -> "Lost" to StatusKind.LOST
+            }
+            val timing = if (stats.framesTracked > 0) String.format(Locale.ROOT, "%.1f ms/frame", stats.totalMs) else "– ms/frame"
+            val refs = "refs L1 ${stats.referencesL1} · L2 ${stats.referencesL2}"
+            val frames = buildString {
+                append(stats.framesTracked).append(" frames")
+                if (stats.framesDropped > 0) append(" · ").append(stats.framesDropped).append(" dropped")
+                if (stats.lostFrames > 0) append(" · ").append(stats.lostFrames).append(" lost")
+            }
+            val message = when {
+                error != null -> error
+                depthCamera == false -> NO_DEPTH_CAMERA
+                permissionDenied && source != FrameSource.REPLAY -> PERMISSION_DENIED
+                stalled -> STALLED
+                source != FrameSource.NONE && state == TrackingState.LOST -> LOST_HINT
+                else -> null
+            }
+            return StatusText(label, kind, timing, refs, frames, message, depthCamera == true && !permissionDenied, recording)
+        }
+
+    companion object {
+        const val NO_DEPTH_CAMERA = "This phone has no depth camera, so live tracking is not available. You can still replay a recorded stream."
+        const val PERMISSION_DENIED = "Camera access was denied, so live tracking is off. Replay still works; allow camera access in the system settings to track live."
+        const val STALLED = "No new frames for a while."
+        const val LOST_HINT = "Tracking lost: move back towards where tracking was last good, slowly."
+    }
+}
