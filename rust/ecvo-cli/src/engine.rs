@@ -1,20 +1,37 @@
 //! Driving the tracking engine over a recorded sequence.
 //!
 //! Everything the commands need from a tracking run goes through
-//! [`track_sequence`], so that the sequential loop here (a [`Preparer`] and a
-//! [`Tracker`] on the calling thread, frames decoded ahead by the sequence reader)
-//! can be swapped for the multithreaded pipeline without touching the commands.
+//! [`track_sequence`], which runs the multithreaded [`ecvo_pipeline::Pipeline`] in
+//! offline (lossless) admission: the sequence reader decodes frames ahead on its own
+//! thread, the calling thread is the pipeline's input stage (it pushes every frame
+//! and collects the outputs, in order), and the filter and tracker stages run on the
+//! pipeline's threads. Offline, the poses are bit for bit those of the sequential
+//! engine whatever the number of threads.
+//!
+//! The point cloud is gathered here rather than by the pipeline's geometry stage:
+//! that stage takes only reference frames (naive tracking has none but the first),
+//! reserves its whole capacity up front and thins or caps the cloud, while
+//! `cloud.ply` wants every selected frame's points, unthinned. A decoded frame is
+//! kept only until its output comes back (a few frames, the pipeline's depth); if
+//! the output says the frame is wanted, the calling thread prepares it again (the
+//! same deterministic code as the filter stage) and copies its points.
 
-use std::sync::Arc;
+use std::collections::VecDeque;
 use std::time::Instant;
 
-use anyhow::{Context, Result};
-use ecvo_core::{Config, Counters, FrameOutput, PreparedFrame, Preparer, Tracker};
-use ecvo_io::Sequence;
+use anyhow::{Context, Result, bail};
+use ecvo_core::{Config, Counters, FrameOutput, PreparedFrame, Preparer};
+use ecvo_io::{Frame, Sequence};
+use ecvo_pipeline::{Admission, Pipeline, PipelineOptions, PipelineStats, TrackedFrame};
 use indicatif::{ProgressBar, ProgressStyle};
 
-/// Decoded frames the reader thread may keep waiting ahead of the tracker.
+/// Decoded frames the reader thread may keep waiting ahead of the pipeline.
 const PREFETCH: usize = 4;
+
+/// Capacity of the pipeline's output channel. The calling thread drains it after
+/// every push, so it never holds more than the frames in flight inside the pipeline
+/// (a dozen or so); the margin keeps the tracker from ever waiting on it.
+const OUTPUT_QUEUE: usize = 1024;
 
 /// Which frames contribute their points to the point cloud.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,8 +59,7 @@ impl CloudFrames {
 pub struct EngineOptions {
     /// Track only the first this many frames (all if `None`).
     pub max_frames: Option<usize>,
-    /// Worker threads (recorded; the sequential engine uses one thread plus the
-    /// frame reader).
+    /// Compute threads of the pipeline (1..=256).
     pub threads: usize,
     /// Show a progress bar on stderr.
     pub progress: bool,
@@ -67,23 +83,6 @@ pub struct FramePoints {
     pub intensity: Vec<u8>,
 }
 
-/// Wall-clock time of each stage for one frame, in milliseconds.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct StageTimes {
-    /// The filter stage: preparing the frame (filters, pyramid, templates).
-    pub filter_ms: f64,
-    /// The tracker stage: motion estimation and error correction.
-    pub tracker_ms: f64,
-}
-
-impl StageTimes {
-    /// Filter plus tracker time (frame decoding runs ahead on its own thread and is
-    /// not included).
-    pub fn total_ms(&self) -> f64 {
-        self.filter_ms + self.tracker_ms
-    }
-}
-
 /// The result of tracking a sequence.
 #[derive(Clone, Debug)]
 pub struct TrackRun {
@@ -91,29 +90,104 @@ pub struct TrackRun {
     pub outputs: Vec<FrameOutput>,
     /// The tracker's counters at the end.
     pub counters: Counters,
-    /// Per-frame stage times, in stream order.
-    pub times: Vec<StageTimes>,
+    /// The pipeline's statistics at the end (stage times, wall time per frame, queue
+    /// depths, drops).
+    pub stats: PipelineStats,
+    /// Milliseconds the calling thread spent gathering each cloud frame's points
+    /// (preparing it again and copying them), in stream order.
+    pub cloud_ms: Vec<f64>,
     /// Points of the frames selected by [`EngineOptions::cloud`], in stream order.
     pub clouds: Vec<FramePoints>,
-    /// Wall-clock time of the whole run, seconds (decoding included).
+    /// Wall-clock time of the whole run, seconds (decoding, the pipeline's start and
+    /// stop and the cloud included).
     pub wall_s: f64,
-    /// Threads the run was asked to use.
+    /// Compute threads the pipeline used.
     pub threads: usize,
 }
 
-/// Tracks `sequence` with `config`: every frame is decoded (ahead, on the reader's
-/// thread), prepared and tracked, and both stages are timed.
+/// The calling thread's side of a run: frames waiting for their output, and what
+/// has come back.
+struct Collector<'a> {
+    cloud: CloudFrames,
+    cloud_stride: usize,
+    preparer: Option<Preparer>,
+    scratch: PreparedFrame,
+    pending: VecDeque<Frame>,
+    outputs: Vec<FrameOutput>,
+    clouds: Vec<FramePoints>,
+    cloud_ms: Vec<f64>,
+    bar: &'a ProgressBar,
+}
+
+impl Collector<'_> {
+    /// Takes one tracked frame: matches it with its decoded frame (returned for
+    /// recycling, if it was kept), and gathers its points if the cloud wants it.
+    fn take(&mut self, t: TrackedFrame) -> Result<Option<Frame>> {
+        let expected = self.outputs.len() as u64;
+        if t.sequence != expected || t.output.index != expected {
+            // Offline admission drops nothing, so a gap is a frame the filter stage
+            // could not prepare.
+            let what = self
+                .pending
+                .front()
+                .map(|f| format!("frame {} (timestamp {})", f.index, f.timestamp))
+                .unwrap_or_else(|| format!("frame {expected}"));
+            bail!("{what} could not be prepared (see the log)");
+        }
+        let mut done = None;
+        if let Some(preparer) = &mut self.preparer {
+            let frame = self
+                .pending
+                .pop_front()
+                .context("an output came back for a frame that was not pushed")?;
+            if self.cloud.wants(&t.output) {
+                let t0 = Instant::now();
+                preparer
+                    .prepare_into(frame.view(), &mut self.scratch)
+                    .with_context(|| {
+                        format!("frame {} (timestamp {})", frame.index, frame.timestamp)
+                    })?;
+                self.clouds.push(frame_points(
+                    &self.scratch,
+                    t.output.index,
+                    self.cloud_stride,
+                ));
+                self.cloud_ms.push(t0.elapsed().as_secs_f64() * 1e3);
+            }
+            done = Some(frame);
+        }
+        self.outputs.push(t.output);
+        self.bar.inc(1);
+        Ok(done)
+    }
+}
+
+/// Tracks `sequence` with `config` through the pipeline (offline, `opts.threads`
+/// compute threads): every frame is decoded (ahead, on the reader's thread), pushed,
+/// prepared and tracked exactly once, in order.
 ///
 /// Fails on an invalid configuration and on the first frame that cannot be decoded
-/// (the error names the file).
+/// or prepared (the error names it).
 pub fn track_sequence(
     sequence: &Sequence,
     config: &Config,
     opts: &EngineOptions,
 ) -> Result<TrackRun> {
-    let mut tracker: Tracker<Arc<PreparedFrame>> =
-        Tracker::new(config.clone()).context("invalid tracker configuration")?;
-    let mut preparer = Preparer::new(tracker.config());
+    let pipeline = Pipeline::new(
+        config.clone(),
+        PipelineOptions {
+            threads: opts.threads,
+            admission: Admission::Offline,
+            geometry: None,
+            keep_trajectory: false,
+            output_queue: Some(OUTPUT_QUEUE),
+            ..PipelineOptions::default()
+        },
+    )
+    .context("invalid tracker configuration")?;
+    let rx = pipeline
+        .outputs()
+        .context("the pipeline has no output channel")?;
     let n = opts
         .max_frames
         .map_or(sequence.len(), |m| m.min(sequence.len()));
@@ -131,49 +205,61 @@ pub fn track_sequence(
     };
 
     let start = Instant::now();
-    let mut outputs = Vec::with_capacity(n);
-    let mut times = Vec::with_capacity(n);
-    let mut clouds = Vec::new();
-    // Prepared frames the tracker no longer holds are reused, so memory stays flat.
-    let mut pool: Vec<Arc<PreparedFrame>> = Vec::new();
+    let mut c = Collector {
+        cloud: opts.cloud,
+        cloud_stride: opts.cloud_stride,
+        preparer: (opts.cloud != CloudFrames::None).then(|| Preparer::new(config)),
+        scratch: PreparedFrame::default(),
+        pending: VecDeque::new(),
+        outputs: Vec::with_capacity(n),
+        clouds: Vec::new(),
+        cloud_ms: Vec::new(),
+        bar: &bar,
+    };
     let mut reader = sequence.reader(Some(n), PREFETCH);
     // Not a `for` loop: the reader is also used inside to recycle frames.
     #[allow(clippy::while_let_on_iterator)]
     while let Some(item) = reader.next() {
         let frame = item.with_context(|| format!("reading {}", sequence.dir().display()))?;
-        let slot = pool.iter().position(|f| Arc::strong_count(f) == 1);
-        let mut prepared = match slot {
-            Some(i) => pool.swap_remove(i),
-            None => Arc::new(PreparedFrame::default()),
-        };
-
-        let t0 = Instant::now();
-        let target = Arc::get_mut(&mut prepared).context("a pooled frame is still shared")?;
-        preparer
-            .prepare_into(frame.view(), target)
+        pipeline
+            .push_view(frame.view())
             .with_context(|| format!("frame {} (timestamp {})", frame.index, frame.timestamp))?;
-        let t1 = Instant::now();
-        let out = tracker.track(prepared.clone());
-        let t2 = Instant::now();
-
-        times.push(StageTimes {
-            filter_ms: (t1 - t0).as_secs_f64() * 1e3,
-            tracker_ms: (t2 - t1).as_secs_f64() * 1e3,
-        });
-        if opts.cloud.wants(&out) {
-            clouds.push(frame_points(&prepared, out.index, opts.cloud_stride));
+        if c.preparer.is_some() {
+            c.pending.push_back(frame);
+        } else {
+            reader.recycle(frame);
         }
-        outputs.push(out);
-        pool.push(prepared);
-        bar.inc(1);
-        reader.recycle(frame);
+        while let Ok(t) = rx.try_recv() {
+            if let Some(f) = c.take(t)? {
+                reader.recycle(f);
+            }
+        }
     }
+    // No more input: the stages drain their queues and stop, and the channel closes
+    // once the tracker has sent its last output.
+    pipeline.close_input();
+    for t in rx.iter() {
+        if let Some(f) = c.take(t)? {
+            reader.recycle(f);
+        }
+    }
+    drop(rx);
+    let summary = pipeline.finish().context("the tracking pipeline failed")?;
     bar.finish_and_clear();
+    if c.outputs.len() != n {
+        let what = c
+            .pending
+            .front()
+            .map(|f| format!("frame {} (timestamp {})", f.index, f.timestamp))
+            .unwrap_or_else(|| format!("frame {}", c.outputs.len()));
+        bail!("{what} could not be prepared (see the log)");
+    }
     Ok(TrackRun {
-        outputs,
-        counters: tracker.counters().clone(),
-        times,
-        clouds,
+        outputs: c.outputs,
+        counters: summary.stats.counters.clone(),
+        stats: summary.stats,
+        cloud_ms: c.cloud_ms,
+        clouds: c.clouds,
         wall_s: start.elapsed().as_secs_f64(),
         threads: opts.threads,
     })

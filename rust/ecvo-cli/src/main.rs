@@ -123,8 +123,9 @@ struct TrackArgs {
     /// A camera.json overriding the sequence's.
     #[arg(long)]
     camera: Option<PathBuf>,
-    /// Worker threads (recorded; the current engine runs the stages on one thread).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
+    /// Compute threads of the tracking pipeline (2 lets the filter and tracker
+    /// stages overlap; the poses are the same whatever the number).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=256))]
     threads: u32,
 }
 

@@ -191,23 +191,42 @@ impl Evaluation {
 }
 
 /// Per-stage milliseconds per frame.
+///
+/// `filter` and `tracker` come from the pipeline's per-stage histograms: the mean is
+/// exact, the median is the centre of its histogram bin (within about 2 %).
+/// `total` is their sum (sum of the medians, sum of the means): the work one frame
+/// needs, which the stages overlap when the pipeline has two threads or more.
+/// `geometry` is the CLI's point gathering per cloud frame (the frame prepared again
+/// and its points copied, on the input thread; 0 when no frame was gathered).
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct StageStats {
     /// The filter stage (frame preparation).
     pub filter: MedianMean,
     /// The tracker stage (motion estimation and correction).
     pub tracker: MedianMean,
-    /// Both stages.
+    /// Filter plus tracker.
     pub total: MedianMean,
+    /// Gathering the points of a cloud frame, per cloud frame.
+    pub geometry: MedianMean,
 }
 
 impl StageStats {
     /// The statistics of a run.
     pub fn of(run: &TrackRun) -> Self {
+        let mm = |s: &ecvo_pipeline::StageStats| MedianMean {
+            median: s.median_ms,
+            mean: s.mean_ms,
+        };
+        let filter = mm(&run.stats.filter);
+        let tracker = mm(&run.stats.tracker);
         StageStats {
-            filter: MedianMean::of(run.times.iter().map(|t| t.filter_ms)),
-            tracker: MedianMean::of(run.times.iter().map(|t| t.tracker_ms)),
-            total: MedianMean::of(run.times.iter().map(|t| t.total_ms())),
+            filter,
+            tracker,
+            total: MedianMean {
+                median: filter.median + tracker.median,
+                mean: filter.mean + tracker.mean,
+            },
+            geometry: MedianMean::of(run.cloud_ms.iter().copied()),
         }
     }
 }
@@ -361,12 +380,48 @@ fn summary_json(
         "ate": t.eval.ate_json(),
         "rpe": t.eval.rpe_json(),
         "ms_per_frame": stages,
+        "wall_ms_per_frame": t.run.stats.wall_ms_per_frame,
+        "latency_ms": { "median": t.run.stats.latency.median_ms, "mean": t.run.stats.latency.mean_ms },
         "wall_time_s": t.run.wall_s,
+        "pipeline": pipeline_json(&t.run.stats),
+        "dropped_frames": t.run.stats.dropped,
         "cloud": {
             "points": cloud_points,
             "frames": t.run.clouds.len(),
             "pixel_stride": outs.cloud_stride,
             "every_nth_frame": (settings.mode == Mode::Naive).then_some(outs.cloud_every),
+        },
+    })
+}
+
+/// The `pipeline` object of summary.json: what the pipeline did besides tracking.
+fn pipeline_json(st: &ecvo_pipeline::PipelineStats) -> serde_json::Value {
+    let queue = |q: &ecvo_pipeline::QueueStats| json!({ "capacity": q.capacity, "max_depth": q.max_depth, "mean_depth": q.mean_depth });
+    let stage = |s: &ecvo_pipeline::StageStats| {
+        json!({
+            "frames": s.frames, "median_ms": s.median_ms, "mean_ms": s.mean_ms,
+            "p95_ms": s.p95_ms, "max_ms": s.max_ms,
+        })
+    };
+    json!({
+        "admission": "offline",
+        "pushed": st.pushed,
+        "tracked": st.tracked,
+        "dropped": st.dropped,
+        "failed_preparations": st.failed_preparations,
+        "stages": {
+            "filter": stage(&st.filter),
+            "tracker": stage(&st.tracker),
+            "latency": stage(&st.latency),
+        },
+        "queues": {
+            "input": queue(&st.input_queue),
+            "tracker": queue(&st.tracker_queue),
+        },
+        "frame_pool": {
+            "capacity": st.frame_pool.capacity,
+            "allocated": st.frame_pool.allocated,
+            "max_in_use": st.frame_pool.max_in_use,
         },
     })
 }
@@ -418,6 +473,17 @@ fn human_summary(seq: &Path, t: &Tracked, s: &StageStats, out: &Path) -> String 
         s.tracker.mean,
         s.total.median,
         s.total.mean
+    );
+    let _ = writeln!(
+        r,
+        "wall: {:.2} ms/frame with {} thread(s) ({:.1} frames/s)",
+        t.run.stats.wall_ms_per_frame,
+        t.run.threads,
+        if t.run.stats.wall_ms_per_frame > 0.0 {
+            1e3 / t.run.stats.wall_ms_per_frame
+        } else {
+            0.0
+        }
     );
     let _ = writeln!(r, "wrote {}", out.display());
     r

@@ -88,6 +88,34 @@ fn l1_levels_override_and_filter_flags() {
     check_files(&out, &s);
 }
 
+/// The pipeline is deterministic: one and two compute threads give the same bytes
+/// in every output but the timings (and the same as the default, two).
+#[test]
+fn one_and_two_threads_give_identical_outputs() {
+    let (one, s1, _) = track("threads-1", &["--threads", "1"]);
+    let (two, s2, _) = track("threads-2", &["--threads", "2"]);
+    assert_eq!(s1["threads"].as_u64(), Some(1), "{s1}");
+    assert_eq!(s2["threads"].as_u64(), Some(2), "{s2}");
+    for file in ["trajectory.txt", "references.txt", "cloud.ply"] {
+        let a = std::fs::read(one.join(file)).unwrap();
+        let b = std::fs::read(two.join(file)).unwrap();
+        assert!(!a.is_empty(), "{file} is empty");
+        assert!(a == b, "{file} differs between --threads 1 and --threads 2");
+    }
+    for key in [
+        "frames",
+        "motion_estimations",
+        "references",
+        "ate_rmse_m",
+        "cloud",
+    ] {
+        assert_eq!(s1[key], s2[key], "{key}");
+    }
+    for s in [&s1, &s2] {
+        assert_eq!(s["dropped_frames"].as_u64(), Some(0), "{s}");
+    }
+}
+
 #[test]
 fn phone_preset_and_camera_override() {
     // The stream's own camera.json given with --camera gives the same result.
@@ -177,8 +205,37 @@ fn check_files(out: &Path, s: &serde_json::Value) {
         "sequence",
         "ecvo_version",
         "threads",
+        "wall_ms_per_frame",
+        "wall_time_s",
+        "dropped_frames",
+        "pipeline",
     ] {
         assert!(s.get(key).is_some(), "summary.json lacks {key}: {s}");
+    }
+    let wall = s["wall_ms_per_frame"].as_f64().unwrap();
+    assert!(wall > 0.0, "{s}");
+    assert!(wall * s["frames"].as_f64().unwrap() <= s["wall_time_s"].as_f64().unwrap() * 1e3);
+    assert_eq!(
+        s["dropped_frames"].as_u64(),
+        Some(0),
+        "offline drops nothing: {s}"
+    );
+    assert_eq!(s["pipeline"]["tracked"], s["frames"], "{s}");
+    for q in ["input", "tracker"] {
+        let q = &s["pipeline"]["queues"][q];
+        assert!(
+            q["max_depth"].as_u64().unwrap() <= q["capacity"].as_u64().unwrap(),
+            "{s}"
+        );
+    }
+    // Every run here writes a cloud, so the CLI's geometry stage has times too.
+    for stat in ["median", "mean"] {
+        assert!(
+            s["ms_per_frame"]["geometry"][stat]
+                .as_f64()
+                .is_some_and(|v| v > 0.0),
+            "{s}"
+        );
     }
     for stage in ["filter", "tracker", "total"] {
         for stat in ["median", "mean"] {
