@@ -965,7 +965,6 @@ fn filter_stage(s: &Shared, mut preparer: Preparer, compute: &rayon::ThreadPool)
             break;
         };
         s.hook(Stage::Filter, raw.sequence);
-        let t0 = Instant::now();
         let slot_mut = Arc::get_mut(&mut slot).expect("an acquired slot is exclusive");
         let view = FrameView {
             timestamp: raw.timestamp,
@@ -973,12 +972,17 @@ fn filter_stage(s: &Shared, mut preparer: Preparer, compute: &rayon::ThreadPool)
             depth: &raw.depth,
         };
         let prepared = &mut slot_mut.frame;
-        let result = compute.install(|| preparer.prepare_into(view, prepared));
+        // Timed inside the pool: a stage's time is its work, not its wait for a thread.
+        let (result, filtered_in) = compute.install(|| {
+            let t0 = Instant::now();
+            let r = preparer.prepare_into(view, prepared);
+            (r, t0.elapsed())
+        });
         slot_mut.meta = FrameMeta {
             sequence: raw.sequence,
             pushed_at: raw.pushed_at,
         };
-        lock(&s.timers.filter).record(t0.elapsed());
+        lock(&s.timers.filter).record(filtered_in);
         s.give_raw(raw);
         if let Err(e) = result {
             log::warn!("ecvo-pipeline: frame not prepared: {e}");
@@ -1019,9 +1023,11 @@ fn tracker_stage(
         let meta = frame.meta();
         s.hook(Stage::Tracker, meta.sequence);
         let for_geometry = s.geometry.is_some().then(|| frame.clone());
-        let t0 = Instant::now();
-        let out = compute.install(|| tracker.track(frame));
-        let tracked_in = t0.elapsed();
+        let (out, tracked_in) = compute.install(|| {
+            let t0 = Instant::now();
+            let out = tracker.track(frame);
+            (out, t0.elapsed())
+        });
 
         let anchored = out.index == 0 || out.reanchored;
         let reference_levels = if anchored {
