@@ -6,6 +6,7 @@
 //! Its storage is reserved up front for `max_points` points, so it never reallocates.
 
 use std::collections::HashSet;
+use std::hash::{BuildHasherDefault, DefaultHasher};
 
 use ecvo_core::{Pose, PreparedFrame};
 
@@ -48,7 +49,10 @@ pub struct CloudPoint {
 pub(crate) struct Cloud {
     opts: GeometryOptions,
     pub(crate) points: Vec<CloudPoint>,
-    voxels: HashSet<(i32, i32, i32)>,
+    /// Fixed-key hashing: std's random `RandomState` would make libecvo_jni import
+    /// bionic's `getrandom` (API 28, above minSdk 26; `check-so.sh` rejects it), and
+    /// the keys are our own voxel indices, so there is nothing to defend against.
+    voxels: HashSet<(i32, i32, i32), BuildHasherDefault<DefaultHasher>>,
     /// Points rejected because the cloud was full.
     pub(crate) discarded: u64,
 }
@@ -59,9 +63,9 @@ impl Cloud {
             opts,
             points: Vec::with_capacity(opts.max_points),
             voxels: if opts.voxel_size_m.is_some() {
-                HashSet::with_capacity(opts.max_points)
+                HashSet::with_capacity_and_hasher(opts.max_points, Default::default())
             } else {
-                HashSet::new()
+                HashSet::default()
             },
             discarded: 0,
         }
