@@ -89,7 +89,7 @@ enum class Mode(val code: Int) {
  *
  * | code | value       | `live` | meaning |
  * |------|-------------|--------|---------|
- * | 0    | [LIVE]      | true   | a camera: a frame that finds the tracker busy is dropped ([PushStatus.DROPPED]) |
+ * | 0    | [LIVE]      | true   | a camera: when the tracker falls behind, the oldest waiting frame is dropped so latency stays bounded ([PushStatus.DROPPED]) |
  * | 1    | [OFFLINE]   | false  | a recording: pushFrame waits until the frame can be queued, nothing is dropped |
  */
 enum class Admission(val code: Int) {
@@ -115,13 +115,13 @@ enum class Admission(val code: Int) {
  * | code | value        | meaning |
  * |------|--------------|---------|
  * | 0    | [ACCEPTED]   | copied and queued for tracking |
- * | 1    | [DROPPED]    | not tracked: the tracker was busy ([Admission.LIVE] only) |
+ * | 1    | [DROPPED]    | this frame was queued, and to make room the oldest frame still waiting was dropped untracked ([Admission.LIVE] only) |
  */
 enum class PushStatus(val code: Int) {
     /** The frame was copied and will be tracked. */
     ACCEPTED(0),
 
-    /** The frame was dropped because the tracker was busy. */
+    /** This frame was queued; an older frame still waiting was dropped untracked to bound latency. */
     DROPPED(1);
 
     companion object {
