@@ -78,6 +78,42 @@ pub struct PreparedFrame {
 }
 
 impl PreparedFrame {
+    /// An empty frame with every buffer reserved at its full size for `config`, so
+    /// that preparing into it never allocates (frame pools create their frames so).
+    pub fn for_config(config: &Config) -> PreparedFrame {
+        let mut cams = vec![config.camera];
+        for _ in 0..config.pyramid_depth() {
+            let half = cams[cams.len() - 1].half();
+            cams.push(half);
+        }
+        let levels = cams
+            .iter()
+            .map(|c| ImageLevel {
+                camera: Some(*c),
+                samples: Vec::with_capacity(c.pixels()),
+            })
+            .collect();
+        let templates = config
+            .motion
+            .levels
+            .iter()
+            .map(|l| {
+                let c = cams[l.pyramid_level];
+                let s = l.stride.max(1);
+                Template {
+                    pyramid_level: l.pyramid_level,
+                    points: Vec::with_capacity((c.width / s + 1) * (c.height / s + 1)),
+                }
+            })
+            .collect();
+        PreparedFrame {
+            levels,
+            templates,
+            normals: Vec::with_capacity(config.camera.pixels()),
+            ..PreparedFrame::default()
+        }
+    }
+
     /// Visits every `stride`-th valid full-resolution pixel as
     /// `(point in camera coordinates, unit normal or NaN, intensity 0..=255)`.
     pub fn for_each_point(&self, stride: usize, mut f: impl FnMut([f32; 3], [f32; 3], u8)) {

@@ -590,16 +590,27 @@ impl Pipeline {
             input_closed: AtomicBool::new(false),
             failure: Mutex::new(None),
             next_sequence: AtomicU64::new(0),
+            // Raw buffers are created now too, for the same reason as the frame pool.
             raw: Mutex::new(RawPool {
-                free: Vec::with_capacity(q + 3),
-                allocated: 0,
+                free: (0..q + 3)
+                    .map(|_| RawFrame {
+                        sequence: 0,
+                        timestamp: 0.0,
+                        pushed_at: Instant::now(),
+                        intensity: vec![0; config.camera.pixels()],
+                        depth: vec![0; config.camera.pixels()],
+                    })
+                    .collect(),
+                allocated: q + 3,
             }),
             raw_freed: Condvar::new(),
             raw_capacity: q + 3,
             input: Queue::new(q),
             prepared: Queue::new(q),
             to_geometry: Queue::new(q),
-            frames: FramePool::new(pool_capacity),
+            frames: FramePool::new(pool_capacity, || {
+                ecvo_core::PreparedFrame::for_config(&config)
+            }),
             progress: Mutex::new(Progress::default()),
             progress_changed: Condvar::new(),
             latest: Mutex::new(LatestPose {

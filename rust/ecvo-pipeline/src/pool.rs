@@ -112,13 +112,26 @@ impl Drop for PooledFrame {
 }
 
 impl FramePool {
-    /// A pool of at most `capacity` slots (allocated on demand, at least 1).
-    pub(crate) fn new(capacity: usize) -> Arc<Self> {
+    /// A pool of `capacity` slots (at least 1), all created now with `make`, so that a
+    /// running pipeline never allocates a frame: which slots a run needs depends on
+    /// thread timing, and a slot first used late would otherwise allocate late.
+    pub(crate) fn new(capacity: usize, make: impl Fn() -> PreparedFrame) -> Arc<Self> {
         let capacity = capacity.max(1);
+        let slots: Vec<Arc<Slot>> = (0..capacity)
+            .map(|_| {
+                Arc::new(Slot {
+                    frame: make(),
+                    meta: FrameMeta {
+                        sequence: 0,
+                        pushed_at: Instant::now(),
+                    },
+                })
+            })
+            .collect();
         Arc::new(FramePool {
             inner: Mutex::new(Inner {
-                slots: Vec::with_capacity(capacity),
-                allocated: 0,
+                slots,
+                allocated: capacity,
                 max_in_use: 0,
             }),
             freed: Condvar::new(),
