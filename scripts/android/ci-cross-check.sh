@@ -97,7 +97,7 @@ done
 
 # 5. qemu -------------------------------------------------------------------------------
 if [ $QEMU = 1 ]; then
-  timed "ecvo-core tests on aarch64 (qemu-user)" "$HERE/test-core-aarch64.sh"
+  timed "ecvo-core tests on aarch64 (qemu-user)" "$HERE/test-core-aarch64.sh" --release
 else
   warn "*** ecvo-core's aarch64 tests NOT run (--skip-qemu-tests) ***"
 fi
