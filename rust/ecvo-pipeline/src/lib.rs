@@ -288,7 +288,6 @@ struct RawFrame {
 
 struct RawPool {
     free: Vec<RawFrame>,
-    allocated: usize,
 }
 
 /// A reference frame on its way to the geometry stage.
@@ -344,7 +343,6 @@ struct Shared {
 
     raw: Mutex<RawPool>,
     raw_freed: Condvar,
-    raw_capacity: usize,
     input: Queue<RawFrame>,
     prepared: Queue<PooledFrame>,
     to_geometry: Queue<GeometryItem>,
@@ -412,20 +410,6 @@ impl Shared {
             }
             if let Some(r) = g.free.pop() {
                 return Ok((r, false));
-            }
-            if g.allocated < self.raw_capacity {
-                g.allocated += 1;
-                let n = self.camera.pixels();
-                return Ok((
-                    RawFrame {
-                        sequence: 0,
-                        timestamp: 0.0,
-                        pushed_at: Instant::now(),
-                        intensity: vec![0; n],
-                        depth: vec![0; n],
-                    },
-                    false,
-                ));
             }
             if self.admission == Admission::Live {
                 drop(g);
@@ -601,10 +585,8 @@ impl Pipeline {
                         depth: vec![0; config.camera.pixels()],
                     })
                     .collect(),
-                allocated: q + 3,
             }),
             raw_freed: Condvar::new(),
-            raw_capacity: q + 3,
             input: Queue::new(q),
             prepared: Queue::new(q),
             to_geometry: Queue::new(q),

@@ -1,15 +1,14 @@
 //! The frame pool: prepared frames shared between stages by reference counting
 //! (the paper's "Frame Pool", section 4.1).
 //!
-//! The pool keeps one `Arc` of every slot it ever allocated. A slot is free when that
+//! The pool keeps one `Arc` of every slot, all created when the pool is. A slot is free when that
 //! is the only `Arc` left: every other holder (a queue, the tracker's previous or
 //! reference frame, the geometry stage) holds a [`PooledFrame`], and dropping the last
 //! one makes the slot free again without freeing its buffers. Nobody can clone a
 //! handle to a slot that no handle points to, so "the pool's `Arc` is the only one" is
 //! a stable observation under the pool's lock. A slot is handed to the filter
 //! exclusively (removed from the pool while it is being written), so writing needs no
-//! `unsafe`. The number of slots is capped; nothing is allocated once every slot
-//! exists.
+//! `unsafe`. The number of slots is fixed, so nothing is allocated after start-up.
 
 use std::ops::Deref;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -40,7 +39,7 @@ pub(crate) struct Slot {
 struct Inner {
     /// The pool's own reference to every slot that is not being written.
     slots: Vec<Arc<Slot>>,
-    /// Slots ever allocated.
+    /// Slots in the pool (all created at start-up).
     allocated: usize,
     /// Most slots in use at once (allocated and not free).
     max_in_use: usize,
@@ -156,22 +155,8 @@ impl FramePool {
             if abort.load(Ordering::Acquire) {
                 return None;
             }
-            let free = g.slots.iter().position(|s| Arc::strong_count(s) == 1);
-            let slot = match free {
-                Some(i) => Some(g.slots.swap_remove(i)),
-                None if g.allocated < self.capacity => {
-                    g.allocated += 1;
-                    Some(Arc::new(Slot {
-                        frame: PreparedFrame::default(),
-                        meta: FrameMeta {
-                            sequence: 0,
-                            pushed_at: Instant::now(),
-                        },
-                    }))
-                }
-                None => None,
-            };
-            if let Some(slot) = slot {
+            if let Some(i) = g.slots.iter().position(|s| Arc::strong_count(s) == 1) {
+                let slot = g.slots.swap_remove(i);
                 let in_use = Self::in_use(&g);
                 g.max_in_use = g.max_in_use.max(in_use);
                 return Some(slot);

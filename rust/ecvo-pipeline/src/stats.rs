@@ -118,7 +118,7 @@ pub struct QueueStats {
 pub struct PoolStats {
     /// Most frames it will ever allocate.
     pub capacity: usize,
-    /// Frames allocated so far (never freed before the pipeline is).
+    /// Frames allocated, all at start-up (freed with the pipeline).
     pub allocated: usize,
     /// Frames held now (being prepared, queued, previous, reference, or waiting for
     /// the geometry stage).
