@@ -2,7 +2,10 @@
 //!
 //! The tracking engine of ecvo: An, Lee, Jeong, Ihm, "Tracking an RGB-D Camera on
 //! Mobile Devices Using an Improved Frame-to-Frame Pose Estimation Method"
-//! (WACV 2018). Frames in, poses out: no file I/O, no threads, no Java.
+//! (WACV 2018). Frames in, poses out: no file I/O, no Java, no threads of its own.
+//! Its heavy loops (MOTION's chunks of template points, the filter's rows) run with
+//! rayon in the caller's pool, over fixed chunks merged in a fixed order, so the
+//! poses are the same whatever the number of threads.
 //!
 //! - [`prepare`]: the filter stage (bilateral, normal-based and contour-based
 //!   depth removal) and the per-level images and template points.

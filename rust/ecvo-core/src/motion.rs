@@ -14,6 +14,7 @@
 //! motion that maps camera `i` coordinates into camera `j` coordinates.
 
 use nalgebra::{Matrix6, SymmetricEigen, Vector6};
+use rayon::prelude::*;
 
 use crate::Pose;
 use crate::config::MotionConfig;
@@ -124,11 +125,17 @@ impl NormalEquations {
     }
 }
 
+/// A Jacobian row `[v; ω]` padded to eight lanes (the last two are 0), so that the
+/// accumulation runs on whole SIMD vectors.
+type JRow = [f32; 8];
+
 /// Accumulates weighted Jacobian rows in single precision over short runs and
-/// flushes them into double precision, keeping both speed and accuracy.
+/// flushes them into double precision, keeping both speed and accuracy. Each row
+/// of `JᵀWJ` is updated whole (eight lanes, the lower triangle too, which is never
+/// read): every upper-triangle entry sees exactly the operations of a scalar loop.
 struct Accumulator {
-    h: [f32; 21],
-    g: [f32; 6],
+    h: [JRow; 6],
+    g: JRow,
     run: usize,
     total: NormalEquations,
 }
@@ -138,23 +145,23 @@ impl Accumulator {
 
     fn new() -> Self {
         Accumulator {
-            h: [0.0; 21],
-            g: [0.0; 6],
+            h: [[0.0; 8]; 6],
+            g: [0.0; 8],
             run: 0,
             total: NormalEquations::default(),
         }
     }
 
     #[inline(always)]
-    fn add(&mut self, j: &[f32; 6], r: f32, w: f32) {
-        let mut k = 0;
-        for a in 0..6 {
-            let wa = w * j[a];
-            for b in a..6 {
-                self.h[k] += wa * j[b];
-                k += 1;
+    fn add(&mut self, j: &JRow, r: f32, w: f32) {
+        let wj: JRow = std::array::from_fn(|b| w * j[b]);
+        for (row, &wa) in self.h.iter_mut().zip(&wj) {
+            for (h, &jb) in row.iter_mut().zip(j) {
+                *h += wa * jb;
             }
-            self.g[a] += wa * r;
+        }
+        for (g, &wa) in self.g.iter_mut().zip(&wj) {
+            *g += wa * r;
         }
     }
 
@@ -169,14 +176,16 @@ impl Accumulator {
     }
 
     fn flush(&mut self) {
-        for k in 0..21 {
-            self.total.h[k] += self.h[k] as f64;
-            self.h[k] = 0.0;
+        let mut k = 0;
+        for a in 0..6 {
+            for b in a..6 {
+                self.total.h[k] += self.h[a][b] as f64;
+                k += 1;
+            }
+            self.total.g[a] += self.g[a] as f64;
         }
-        for k in 0..6 {
-            self.total.g[k] += self.g[k] as f64;
-            self.g[k] = 0.0;
-        }
+        self.h = [[0.0; 8]; 6];
+        self.g = [0.0; 8];
         self.run = 0;
     }
 
@@ -208,17 +217,63 @@ struct Residual {
 /// Smallest number of residuals a coarse step needs to be worth solving.
 const MIN_STEP_RESIDUALS: usize = 24;
 
+/// Template points per chunk of the parallel loops. The chunking is fixed, so every
+/// sum is grouped the same way whatever the number of threads: the poses do not
+/// depend on it.
+pub const CHUNK: usize = 4096;
+
+/// Fewest chunks one rayon task takes. Handing work to another thread costs tens of
+/// microseconds (waking it, and spinning while waiting for it), so a loop is only
+/// split when each part has at least this many chunks: at 640x480 the finest step
+/// (about 77k points) splits into four tasks, at 320x240 (about 19k) it stays on
+/// the calling thread, where the pipeline's stage overlap already keeps the cores
+/// busy.
+pub const MIN_CHUNKS_PER_TASK: usize = 4;
+
 /// Runs `MOTION` and keeps its scratch buffers between calls, so that a warm
 /// estimator does not allocate.
+///
+/// The per-point work runs over fixed chunks of [`CHUNK`] template points: warping
+/// and the normal equations with rayon (in whatever pool the caller is in) once a
+/// template is large enough, the cheap t-scale passes on the calling thread. The
+/// per-chunk partial sums are added in chunk order.
 #[derive(Debug, Default)]
 pub struct MotionEstimator {
-    residuals: Vec<Residual>,
+    /// Residuals of each chunk of template points.
+    chunks: Vec<Vec<Residual>>,
+    /// Per-chunk normal equations, merged in order.
+    partial: Vec<NormalEquations>,
+    /// Chunks the last warp filled.
+    used: usize,
 }
 
 impl MotionEstimator {
     /// A new estimator with empty scratch buffers.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// An estimator whose scratch buffers hold templates of up to `max_points`
+    /// points, so that it never allocates while tracking.
+    pub fn with_capacity(max_points: usize) -> Self {
+        let mut e = Self::default();
+        e.reserve(max_points.div_ceil(CHUNK));
+        e
+    }
+
+    fn reserve(&mut self, chunks: usize) {
+        if self.chunks.len() < chunks {
+            self.chunks
+                .resize_with(chunks, || Vec::with_capacity(CHUNK));
+            self.partial
+                .reserve(chunks.saturating_sub(self.partial.len()));
+        }
+    }
+
+    /// The residuals of the last warp, chunk after chunk.
+    #[cfg(test)]
+    fn residuals(&self) -> impl Iterator<Item = &Residual> {
+        self.chunks[..self.used].iter().flatten()
     }
 
     /// `MOTION(Fi, Fj, Tinit)`: estimates `T_{i,j}`, the motion from the current
@@ -267,7 +322,7 @@ impl MotionEstimator {
                     hit_max = false;
                     break;
                 }
-                let s2 = t_scale(&self.residuals, nu, sigma2);
+                let s2 = t_scale(&self.chunks[..self.used], nu, sigma2);
                 sigma2 = Some(s2);
                 let ne = self.normal_equations(level, s2, nu, lambda2);
                 let err = ne.error / ne.count as f64;
@@ -336,14 +391,114 @@ impl MotionEstimator {
         lambda2: f32,
     ) -> usize {
         let cam = level.camera();
-        let (w, h) = (cam.width, cam.height);
-        let (fx, fy, cx, cy) = (cam.fx as f32, cam.fy as f32, cam.cx as f32, cam.cy as f32);
+        assert_eq!(
+            level.samples.len(),
+            cam.width * cam.height,
+            "level buffer matches its camera"
+        );
         let m = t.to_homogeneous();
-        let r: [[f32; 4]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)] as f32));
-        let samples: &[Sample] = &level.samples;
-        assert_eq!(samples.len(), w * h, "level buffer matches its camera");
-        let (umax, vmax) = ((w - 1) as f32, (h - 1) as f32);
-        self.residuals.clear();
+        let warp = Warp {
+            r: std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)] as f32)),
+            f: [cam.fx as f32, cam.fy as f32, cam.cx as f32, cam.cy as f32],
+            w: cam.width,
+            max: [(cam.width - 1) as f32, (cam.height - 1) as f32],
+            samples: &level.samples,
+            lambda2,
+        };
+        let n = points.len().div_ceil(CHUNK);
+        self.reserve(n);
+        self.used = n;
+        let bufs = &mut self.chunks[..n];
+        if n < 2 * MIN_CHUNKS_PER_TASK {
+            for (pts, buf) in points.chunks(CHUNK).zip(bufs.iter_mut()) {
+                warp.run(pts, buf);
+            }
+        } else {
+            points
+                .par_chunks(CHUNK)
+                .zip(bufs.par_iter_mut())
+                .with_min_len(MIN_CHUNKS_PER_TASK)
+                .for_each(|(pts, buf)| warp.run(pts, buf));
+        }
+        self.chunks[..n].iter().map(Vec::len).sum()
+    }
+
+    /// Weights the stored residuals and accumulates the normal equations.
+    fn normal_equations(
+        &mut self,
+        level: &crate::prepare::ImageLevel,
+        sigma2: f32,
+        nu: f32,
+        lambda2: f32,
+    ) -> NormalEquations {
+        let cam = level.camera();
+        let (fx, fy) = (cam.fx as f32, cam.fy as f32);
+        let inv_s2 = 1.0 / sigma2;
+        let accumulate = |res: &Vec<Residual>| {
+            let mut acc = Accumulator::new();
+            for r in res {
+                let depth = r.rz.is_finite();
+                let dims = if depth { 2.0 } else { 1.0 };
+                let w = (nu + dims) / (nu + r.e2 * inv_s2);
+                let (ji, jz) = jacobians(r, fx, fy);
+                acc.add(&ji, r.ri, w);
+                if let Some(jz) = jz {
+                    acc.add(&jz, r.rz, w * lambda2);
+                }
+                acc.end_pixel(w * r.e2);
+            }
+            acc.finish()
+        };
+        map_chunks(&self.chunks[..self.used], &mut self.partial, accumulate);
+        let mut total = NormalEquations::default();
+        for p in &self.partial {
+            total.merge(p);
+        }
+        total
+    }
+}
+
+/// `out[k] = f(&chunks[k])`, with rayon when there are enough chunks to split. The
+/// results stay in chunk order, so what the caller sums does not depend on the
+/// number of threads.
+fn map_chunks<T: Send>(
+    chunks: &[Vec<Residual>],
+    out: &mut Vec<T>,
+    f: impl Fn(&Vec<Residual>) -> T + Sync + Send,
+) {
+    if chunks.len() < 2 * MIN_CHUNKS_PER_TASK {
+        out.clear();
+        out.extend(chunks.iter().map(f));
+    } else {
+        chunks
+            .par_iter()
+            .with_min_len(MIN_CHUNKS_PER_TASK)
+            .map(f)
+            .collect_into_vec(out);
+    }
+}
+
+/// The warp of one linearisation: `T_{j→i}`, the current level's intrinsics and
+/// samples. Shared by the chunks of the parallel loop.
+struct Warp<'a> {
+    r: [[f32; 4]; 3],
+    /// fx, fy, cx, cy.
+    f: [f32; 4],
+    w: usize,
+    /// Largest u and v a bilinear lookup may start from (exclusive).
+    max: [f32; 2],
+    samples: &'a [Sample],
+    lambda2: f32,
+}
+
+impl Warp<'_> {
+    /// Warps `points` and stores the residuals of those that land inside the level.
+    fn run(&self, points: &[[f32; 4]], out: &mut Vec<Residual>) {
+        let r = &self.r;
+        let [fx, fy, cx, cy] = self.f;
+        let [umax, vmax] = self.max;
+        let lambda2 = self.lambda2;
+        out.clear();
         for q in points {
             let x = r[0][0] * q[0] + r[0][1] * q[1] + r[0][2] * q[2] + r[0][3];
             let y = r[1][0] * q[0] + r[1][1] * q[1] + r[1][2] * q[2] + r[1][3];
@@ -358,7 +513,7 @@ impl MotionEstimator {
             if !(u >= 0.0 && v >= 0.0 && u < umax && v < vmax) {
                 continue;
             }
-            let s = bilinear(samples, w, u, v);
+            let s = bilinear(self.samples, self.w, u, v);
             let ri = s[0] - q[3];
             let rz = s[3] - z;
             let depth_ok = rz.is_finite() && s[4].is_finite() && s[5].is_finite();
@@ -368,7 +523,7 @@ impl MotionEstimator {
             } else {
                 ri * ri
             };
-            self.residuals.push(Residual {
+            out.push(Residual {
                 ri,
                 rz,
                 e2,
@@ -379,33 +534,6 @@ impl MotionEstimator {
                 p: [x, y, z],
             });
         }
-        self.residuals.len()
-    }
-
-    /// Weights the stored residuals and accumulates the normal equations.
-    fn normal_equations(
-        &self,
-        level: &crate::prepare::ImageLevel,
-        sigma2: f32,
-        nu: f32,
-        lambda2: f32,
-    ) -> NormalEquations {
-        let cam = level.camera();
-        let (fx, fy) = (cam.fx as f32, cam.fy as f32);
-        let inv_s2 = 1.0 / sigma2;
-        let mut acc = Accumulator::new();
-        for r in &self.residuals {
-            let depth = r.rz.is_finite();
-            let dims = if depth { 2.0 } else { 1.0 };
-            let w = (nu + dims) / (nu + r.e2 * inv_s2);
-            let (ji, jz) = jacobians(r, fx, fy);
-            acc.add(&ji, r.ri, w);
-            if let Some(jz) = jz {
-                acc.add(&jz, r.rz, w * lambda2);
-            }
-            acc.end_pixel(w * r.e2);
-        }
-        acc.finish()
     }
 }
 
@@ -413,7 +541,7 @@ impl MotionEstimator {
 /// warped point with respect to a left perturbation `exp(δ) T`:
 /// `J_I = ∇I · ∂π/∂p · [I | −[p]×]` and `J_Z = (∇D · ∂π/∂p − e_z) · [I | −[p]×]`.
 #[inline(always)]
-fn jacobians(r: &Residual, fx: f32, fy: f32) -> ([f32; 6], Option<[f32; 6]>) {
+fn jacobians(r: &Residual, fx: f32, fy: f32) -> (JRow, Option<JRow>) {
     let [x, y, z] = r.p;
     let iz = 1.0 / z;
     let a = [
@@ -432,9 +560,9 @@ fn jacobians(r: &Residual, fx: f32, fy: f32) -> ([f32; 6], Option<[f32; 6]>) {
     (twist_row(a, r.p), jz)
 }
 
-/// `a · [I | −[p]×] = [a, p × a]`.
+/// `a · [I | −[p]×] = [a, p × a]`, padded.
 #[inline(always)]
-fn twist_row(a: [f32; 3], p: [f32; 3]) -> [f32; 6] {
+fn twist_row(a: [f32; 3], p: [f32; 3]) -> JRow {
     [
         a[0],
         a[1],
@@ -442,6 +570,8 @@ fn twist_row(a: [f32; 3], p: [f32; 3]) -> [f32; 6] {
         p[1] * a[2] - p[2] * a[1],
         p[2] * a[0] - p[0] * a[2],
         p[0] * a[1] - p[1] * a[0],
+        0.0,
+        0.0,
     ]
 }
 
@@ -463,28 +593,32 @@ fn bilinear(s: &[Sample], w: usize, u: f32, v: f32) -> Sample {
 }
 
 /// The scale σ² of a bivariate t-distribution with `nu` degrees of freedom fitted
-/// to the residuals by fixed-point iteration (Kerl et al.), started from `start`
-/// (the previous iteration's scale) when given; pixels with only a photometric
-/// residual count as one dimension.
-fn t_scale(res: &[Residual], nu: f32, start: Option<f32>) -> f32 {
-    let dims: f32 = res
+/// to the residuals (in chunks, see [`CHUNK`]) by fixed-point iteration (Kerl et
+/// al.), started from `start` (the previous iteration's scale) when given; pixels
+/// with only a photometric residual count as one dimension. A pass is a few
+/// operations a residual, cheaper than handing it to other threads: it runs here.
+fn t_scale(chunks: &[Vec<Residual>], nu: f32, start: Option<f32>) -> f32 {
+    let dims: usize = chunks
         .iter()
-        .map(|r| if r.rz.is_finite() { 2.0 } else { 1.0 })
+        .flatten()
+        .map(|r| if r.rz.is_finite() { 2 } else { 1 })
         .sum();
-    if res.is_empty() || dims == 0.0 {
+    if dims == 0 {
         return 1.0;
     }
+    let dims = dims as f64;
     let mut s2 = match start {
         Some(s) if s > 0.0 && s.is_finite() => s as f64,
-        _ => (res.iter().map(|r| r.e2 as f64).sum::<f64>() / dims as f64).max(1e-12),
+        _ => (chunks.iter().flatten().map(|r| r.e2 as f64).sum::<f64>() / dims).max(1e-12),
     };
     for _ in 0..20 {
         let inv = (1.0 / s2) as f32;
         // Sum in f32 over short runs, then in f64.
-        let acc: f64 = res
-            .chunks(256)
-            .map(|c| {
-                c.iter()
+        let acc: f64 = chunks
+            .iter()
+            .flat_map(|c| c.chunks(256))
+            .map(|run| {
+                run.iter()
                     .map(|r| {
                         let d = if r.rz.is_finite() { 2.0 } else { 1.0 };
                         r.e2 * (nu + d) / (nu + r.e2 * inv)
@@ -492,7 +626,7 @@ fn t_scale(res: &[Residual], nu: f32, start: Option<f32>) -> f32 {
                     .sum::<f32>() as f64
             })
             .sum();
-        let next = (acc / dims as f64).max(1e-12);
+        let next = (acc / dims).max(1e-12);
         let done = (next - s2).abs() < 1e-3 * s2;
         s2 = next;
         if done {
@@ -582,18 +716,18 @@ mod tests {
             let mut est = MotionEstimator::new();
             let n = est.residuals_at(&t, &points, &level, 3.24);
             assert_eq!(n, points.len());
-            let base = est.residuals.clone();
+            let base: Vec<Residual> = est.residuals().copied().collect();
             let h = 1e-4;
             for k in 0..6 {
                 let mut d = Vector6::zeros();
                 d[k] = h;
                 let plus = {
                     est.residuals_at(&(se3::exp(&d) * t), &points, &level, 3.24);
-                    est.residuals.clone()
+                    est.residuals().copied().collect::<Vec<_>>()
                 };
                 let minus = {
                     est.residuals_at(&(se3::exp(&-d) * t), &points, &level, 3.24);
-                    est.residuals.clone()
+                    est.residuals().copied().collect::<Vec<_>>()
                 };
                 for (i, r) in base.iter().enumerate() {
                     let (ji, jz) = jacobians(r, cam.fx as f32, cam.fy as f32);
@@ -630,10 +764,10 @@ mod tests {
                 }
             })
             .collect();
-        let s2 = t_scale(&res, 5.0, None);
+        let s2 = t_scale(std::slice::from_ref(&res), 5.0, None);
         assert!((s2 / (s * s) - 1.0).abs() < 0.05, "sigma² {s2}");
         assert_eq!(t_scale(&[], 5.0, None), 1.0);
-        let warm = t_scale(&res, 5.0, Some(0.01));
+        let warm = t_scale(std::slice::from_ref(&res), 5.0, Some(0.01));
         assert!((warm / s2 - 1.0).abs() < 0.01, "warm start {warm} vs {s2}");
     }
 

@@ -20,6 +20,28 @@ use crate::camera::{Camera, FrameView};
 use crate::config::{Config, FilterConfig, MotionLevel};
 use crate::error::Result;
 
+use rayon::prelude::*;
+
+/// Fewest pixels one rayon task of a row-parallel loop takes. Handing work to
+/// another thread costs tens of microseconds, so an image is only split when each
+/// part has at least this many pixels: a 640x480 image into four tasks, a 320x240
+/// one not at all. Every output pixel depends only on the inputs, never on the
+/// order of the rows, so the result is the same whatever the number of threads.
+const PIXELS_PER_TASK: usize = 65536;
+
+/// Rows of width `w` per rayon task.
+fn rows_per_task(w: usize) -> usize {
+    PIXELS_PER_TASK.div_ceil(w.max(1))
+}
+
+/// Runs `f(y, row)` over the rows of width `w` of `out`, with rayon.
+fn rows<T: Send>(out: &mut [T], w: usize, f: impl Fn(usize, &mut [T]) + Sync + Send) {
+    out.par_chunks_mut(w)
+        .enumerate()
+        .with_min_len(rows_per_task(w))
+        .for_each(|(y, row)| f(y, row));
+}
+
 /// Channels of one pixel of an [`ImageLevel`]: intensity in [0, 1], its x and y
 /// gradients, depth in metres (NaN when missing), its x and y gradients (NaN when a
 /// neighbour is missing), and two pad lanes so a pixel is 32 bytes.
@@ -81,11 +103,7 @@ impl PreparedFrame {
     /// An empty frame with every buffer reserved at its full size for `config`, so
     /// that preparing into it never allocates (frame pools create their frames so).
     pub fn for_config(config: &Config) -> PreparedFrame {
-        let mut cams = vec![config.camera];
-        for _ in 0..config.pyramid_depth() {
-            let half = cams[cams.len() - 1].half();
-            cams.push(half);
-        }
+        let cams = level_cameras(config);
         let levels = cams
             .iter()
             .map(|c| ImageLevel {
@@ -97,13 +115,9 @@ impl PreparedFrame {
             .motion
             .levels
             .iter()
-            .map(|l| {
-                let c = cams[l.pyramid_level];
-                let s = l.stride.max(1);
-                Template {
-                    pyramid_level: l.pyramid_level,
-                    points: Vec::with_capacity((c.width / s + 1) * (c.height / s + 1)),
-                }
+            .map(|l| Template {
+                pyramid_level: l.pyramid_level,
+                points: Vec::with_capacity(template_capacity(&cams[l.pyramid_level], l.stride)),
             })
             .collect();
         PreparedFrame {
@@ -156,6 +170,8 @@ pub struct Preparer {
     keep: Vec<bool>,
     normal_drop: Vec<bool>,
     contour_drop: Vec<bool>,
+    contour_seed: Vec<bool>,
+    dilate_tmp: Vec<bool>,
     zeroed: Vec<f32>,
     spatial: Vec<f32>,
 }
@@ -188,6 +204,8 @@ impl Preparer {
             keep: Vec::new(),
             normal_drop: Vec::new(),
             contour_drop: Vec::new(),
+            contour_seed: Vec::new(),
+            dilate_tmp: Vec::new(),
             zeroed: Vec::new(),
             spatial,
         }
@@ -276,13 +294,13 @@ impl Preparer {
                 .iter()
                 .map(|&z| if z.is_finite() { z } else { 0.0 }),
         );
-        let spatial = &self.spatial;
-        for y in 0..h {
+        let (zeroed, spatial) = (&self.zeroed, &self.spatial);
+        rows(&mut self.smoothed, w, |y, out| {
             let (y0, y1) = (y.saturating_sub(radius), (y + radius).min(h - 1));
-            for x in 0..w {
-                let zc = self.zeroed[y * w + x];
+            for (x, o) in out.iter_mut().enumerate() {
+                let zc = zeroed[y * w + x];
                 if zc == 0.0 {
-                    self.smoothed[y * w + x] = f32::NAN;
+                    *o = f32::NAN;
                     continue;
                 }
                 let s = sigma_rel * zc;
@@ -290,7 +308,7 @@ impl Preparer {
                 let (x0, x1) = (x.saturating_sub(radius), (x + radius).min(w - 1));
                 let (mut acc, mut wsum) = (0.0f32, 0.0f32);
                 for yy in y0..=y1 {
-                    let row = &self.zeroed[yy * w + x0..=yy * w + x1];
+                    let row = &zeroed[yy * w + x0..=yy * w + x1];
                     let so = (yy + radius - y) * side + (x0 + radius - x);
                     let srow = &spatial[so..so + row.len()];
                     for (&z, &ws) in row.iter().zip(srow) {
@@ -302,9 +320,9 @@ impl Preparer {
                         wsum += wgt;
                     }
                 }
-                self.smoothed[y * w + x] = acc / wsum;
+                *o = acc / wsum;
             }
-        }
+        });
     }
 
     /// Back-projects `self.smoothed` into `self.points` (NaN where missing).
@@ -350,57 +368,65 @@ impl Preparer {
         let contour_drop = &mut self.contour_drop;
         normal_drop.clear();
         normal_drop.resize(n, false);
-        contour_drop.clear();
-        contour_drop.resize(n, false);
-        for y in 1..h.saturating_sub(1) {
-            for x in 1..w - 1 {
-                let i = y * w + x;
-                let c = p[i];
-                if !c[2].is_finite() {
-                    continue;
+        // First the pixels where the contour test fires (`contour_seed`), then their
+        // 3x3 neighbourhoods (`contour_drop`), so that every row is written by one task.
+        let contour_seed = &mut self.contour_seed;
+        contour_seed.clear();
+        contour_seed.resize(n, false);
+        let interior = |y: usize| y >= 1 && y + 1 < h;
+        normals
+            .par_chunks_mut(w)
+            .zip(normal_drop.par_chunks_mut(w))
+            .zip(contour_seed.par_chunks_mut(w))
+            .enumerate()
+            .with_min_len(rows_per_task(w))
+            .for_each(|(y, ((normals, normal_drop), seed))| {
+                if !interior(y) {
+                    return;
                 }
-                let (l, r, u, d) = (p[i - 1], p[i + 1], p[i - w], p[i + w]);
-                let (ul, ur, dl, dr) = (p[i - w - 1], p[i - w + 1], p[i + w - 1], p[i + w + 1]);
-                let all = [l, r, u, d, ul, ur, dl, dr]
-                    .iter()
-                    .all(|q| q[2].is_finite());
-                if all {
-                    let np = cross(sub(r, l), sub(d, u));
-                    let nd = cross(sub(dr, ul), sub(dl, ur));
-                    if let (Some(np), Some(nd)) = (unit(np), unit(nd)) {
-                        let cosang = dot(np, nd);
-                        if cos_n.is_some_and(|cn| cosang < cn) {
-                            normal_drop[i] = true;
-                        } else if let Some(mut avg) = unit(add(np, nd)) {
-                            if dot(avg, c) > 0.0 {
-                                avg = [-avg[0], -avg[1], -avg[2]];
+                for x in 1..w - 1 {
+                    let i = y * w + x;
+                    let c = p[i];
+                    if !c[2].is_finite() {
+                        continue;
+                    }
+                    let (l, r, u, d) = (p[i - 1], p[i + 1], p[i - w], p[i + w]);
+                    let (ul, ur, dl, dr) = (p[i - w - 1], p[i - w + 1], p[i + w - 1], p[i + w + 1]);
+                    let all = [l, r, u, d, ul, ur, dl, dr]
+                        .iter()
+                        .all(|q| q[2].is_finite());
+                    if all {
+                        let np = cross(sub(r, l), sub(d, u));
+                        let nd = cross(sub(dr, ul), sub(dl, ur));
+                        if let (Some(np), Some(nd)) = (unit(np), unit(nd)) {
+                            let cosang = dot(np, nd);
+                            if cos_n.is_some_and(|cn| cosang < cn) {
+                                normal_drop[x] = true;
+                            } else if let Some(mut avg) = unit(add(np, nd)) {
+                                if dot(avg, c) > 0.0 {
+                                    avg = [-avg[0], -avg[1], -avg[2]];
+                                }
+                                normals[x] = avg;
                             }
-                            normals[i] = avg;
+                        } else if cos_n.is_some() {
+                            normal_drop[x] = true;
                         }
                     } else if cos_n.is_some() {
-                        normal_drop[i] = true;
+                        // The neighbourhood is incomplete: the normals cannot vouch for it.
+                        normal_drop[x] = true;
                     }
-                } else if cos_n.is_some() {
-                    // The neighbourhood is incomplete: the normals cannot vouch for it.
-                    normal_drop[i] = true;
-                }
-                if let Some(sg) = sin_g
-                    && l[2].is_finite()
-                    && u[2].is_finite()
-                {
-                    let nc = cross(sub(l, c), sub(u, c));
-                    let nn = dot(nc, nc).sqrt();
-                    let pn = dot(c, c).sqrt();
-                    if nn > 0.0 && (dot(nc, c) / (nn * pn)).abs() <= sg {
-                        for yy in y - 1..=y + 1 {
-                            for xx in x - 1..=x + 1 {
-                                contour_drop[yy * w + xx] = true;
-                            }
-                        }
+                    if let Some(sg) = sin_g
+                        && l[2].is_finite()
+                        && u[2].is_finite()
+                    {
+                        let nc = cross(sub(l, c), sub(u, c));
+                        let nn = dot(nc, nc).sqrt();
+                        let pn = dot(c, c).sqrt();
+                        seed[x] = nn > 0.0 && (dot(nc, c) / (nn * pn)).abs() <= sg;
                     }
                 }
-            }
-        }
+            });
+        dilate3x3(&self.contour_seed, &mut self.dilate_tmp, contour_drop, w);
         // Border pixels have no complete neighbourhood either.
         if cos_n.is_some() {
             for x in 0..w {
@@ -429,6 +455,43 @@ impl Preparer {
         }
         (by_normal, by_contour)
     }
+}
+
+/// `dst` = the 3x3 dilation of the mask `src` of row width `w` (`tmp` is scratch):
+/// a horizontal pass, then a vertical one, each row written by one task.
+fn dilate3x3(src: &[bool], tmp: &mut Vec<bool>, dst: &mut Vec<bool>, w: usize) {
+    let n = src.len();
+    tmp.clear();
+    tmp.resize(n, false);
+    rows(tmp, w, |y, out| {
+        let s = &src[y * w..(y + 1) * w];
+        if w < 3 {
+            let any = s.contains(&true);
+            out.fill(any);
+            return;
+        }
+        out[0] = s[0] | s[1];
+        out[w - 1] = s[w - 2] | s[w - 1];
+        for (o, ((a, b), c)) in out[1..w - 1]
+            .iter_mut()
+            .zip(s[..w - 2].iter().zip(&s[1..w - 1]).zip(&s[2..]))
+        {
+            *o = *a | *b | *c;
+        }
+    });
+    let h = n / w.max(1);
+    dst.clear();
+    dst.resize(n, false);
+    let tmp = &*tmp;
+    rows(dst, w, |y, out| {
+        let row = |yy: usize| &tmp[yy * w..(yy + 1) * w];
+        let mid = row(y);
+        let up = row(y.saturating_sub(1));
+        let down = row((y + 1).min(h - 1));
+        for (o, ((a, b), c)) in out.iter_mut().zip(up.iter().zip(mid).zip(down)) {
+            *o = *a | *b | *c;
+        }
+    });
 }
 
 /// 2x2 downsampling: mean intensity; mean depth of the valid pixels when they agree
@@ -493,6 +556,34 @@ fn gradients(level: &mut ImageLevel) {
             s[i][5] = 0.5 * (s[i + w][D] - s[i - w][D]);
         }
     }
+}
+
+/// The intrinsics of every pyramid level of `config`, full resolution first.
+fn level_cameras(config: &Config) -> Vec<Camera> {
+    let mut cams = vec![config.camera];
+    for _ in 0..config.pyramid_depth() {
+        let half = cams[cams.len() - 1].half();
+        cams.push(half);
+    }
+    cams
+}
+
+/// The most template points a level of camera `c` sampled every `stride` pixels has.
+fn template_capacity(c: &Camera, stride: usize) -> usize {
+    let s = stride.max(1);
+    (c.width / s + 1) * (c.height / s + 1)
+}
+
+/// The most template points any step of `config`'s schedule can have.
+pub fn max_template_points(config: &Config) -> usize {
+    let cams = level_cameras(config);
+    config
+        .motion
+        .levels
+        .iter()
+        .map(|l| template_capacity(&cams[l.pyramid_level], l.stride))
+        .max()
+        .unwrap_or(0)
 }
 
 /// Every `stride`-th valid pixel of `level` (away from the border) as a template point.

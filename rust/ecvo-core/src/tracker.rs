@@ -109,7 +109,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         config.validate()?;
         let levels = config.reference_levels.len();
         Ok(Tracker {
-            estimator: MotionEstimator::new(),
+            estimator: MotionEstimator::with_capacity(crate::prepare::max_template_points(&config)),
             prev: None,
             refs: vec![None; levels],
             counters: Counters {

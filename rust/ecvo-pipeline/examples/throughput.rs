@@ -1,10 +1,12 @@
 //! Throughput of the pipeline against the sequential engine on a TUM stream.
 //!
 //! Decodes the frames into memory first, then times tracking all of them with
-//! `ecvo_core::Odometry` (sequential) and with the offline `Pipeline`, alternating
-//! the two `--repeat` times, prints frames per second (median over the repeats), the
-//! ratio, the pipeline's stage times, and checks that both give the same poses bit
-//! for bit (exit status 1 if not).
+//! `ecvo_core::Odometry` (sequential) in a one-thread rayon pool (the one-core
+//! baseline), with `Odometry` in a `--threads` pool (ecvo-core's parallel loops
+//! alone), and with the offline `Pipeline` of `--threads` threads, alternating them
+//! `--repeat` times. It prints frames per second (median over the repeats), the
+//! ratios to the one-core baseline, the pipeline's stage times, and checks that all
+//! give the same poses bit for bit (exit status 1 if not).
 //!
 //! ```text
 //! cargo run --release -p ecvo-pipeline --example throughput -- tum_fr1_xyz_half
@@ -74,14 +76,22 @@ fn parse() -> Result<Args, String> {
     Ok(a)
 }
 
-fn sequential(config: &Config, frames: &[ecvo_io::Frame]) -> (f64, Vec<Pose>) {
+/// The sequential engine inside a rayon pool of `threads` threads: with one, the
+/// baseline of one core; with more, ecvo-core's own parallel loops.
+fn sequential(config: &Config, frames: &[ecvo_io::Frame], threads: usize) -> (f64, Vec<Pose>) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("thread pool");
     let mut odo = Odometry::new(config.clone()).expect("valid config");
-    let t0 = Instant::now();
-    let poses = frames
-        .iter()
-        .map(|f| odo.push(f.view()).expect("frame matches camera").pose)
-        .collect();
-    (t0.elapsed().as_secs_f64(), poses)
+    pool.install(|| {
+        let t0 = Instant::now();
+        let poses = frames
+            .iter()
+            .map(|f| odo.push(f.view()).expect("frame matches camera").pose)
+            .collect();
+        (t0.elapsed().as_secs_f64(), poses)
+    })
 }
 
 fn pipeline(
@@ -158,13 +168,18 @@ fn main() -> ExitCode {
     );
     let config = Config::new(*cam, Preset::Pc, args.mode);
 
-    let (mut seq_fps, mut pipe_fps) = (Vec::new(), Vec::new());
-    let (mut seq_poses, mut pipe_poses, mut stats) = (None, None, None);
+    let (mut seq_fps, mut par_fps, mut pipe_fps) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut seq_poses, mut par_poses, mut pipe_poses, mut stats) = (None, None, None, None);
     for _ in 0..args.repeat {
         if args.only.as_deref() != Some("pipeline") {
-            let (secs, poses) = sequential(&config, &frames);
+            let (secs, poses) = sequential(&config, &frames, 1);
             seq_fps.push(n as f64 / secs);
             seq_poses = Some(poses);
+            if args.threads > 1 && args.only.is_none() {
+                let (secs, poses) = sequential(&config, &frames, args.threads);
+                par_fps.push(n as f64 / secs);
+                par_poses = Some(poses);
+            }
         }
         if args.only.as_deref() != Some("sequential") {
             let (secs, poses, st) = pipeline(&config, &frames, args.threads);
@@ -175,14 +190,23 @@ fn main() -> ExitCode {
     }
     if !seq_fps.is_empty() {
         println!(
-            "sequential Odometry: {:7.2} frames/s (median of {})",
+            "sequential Odometry, 1 thread: {:7.2} frames/s (median of {})",
             median(seq_fps.clone()),
             seq_fps.len()
         );
     }
+    if !par_fps.is_empty() {
+        println!(
+            "sequential Odometry, {} threads (ecvo-core's parallel loops only): {:7.2} frames/s (median of {})",
+            args.threads,
+            median(par_fps.clone()),
+            par_fps.len()
+        );
+    }
     if let Some(st) = &stats {
         println!(
-            "pipeline (offline):  {:7.2} frames/s (median of {})",
+            "pipeline (offline), {} threads: {:7.2} frames/s (median of {})",
+            args.threads,
             median(pipe_fps.clone()),
             pipe_fps.len()
         );
@@ -201,14 +225,21 @@ fn main() -> ExitCode {
         );
     }
     if !seq_fps.is_empty() && !pipe_fps.is_empty() {
+        let seq = median(seq_fps);
         println!(
-            "ratio pipeline/sequential: {:.2}x",
-            median(pipe_fps) / median(seq_fps)
+            "ratio pipeline/sequential (1 thread): {:.2}x",
+            median(pipe_fps) / seq
         );
-        let identical = same(
-            seq_poses.as_deref().unwrap_or_default(),
-            pipe_poses.as_deref().unwrap_or_default(),
-        );
+        if !par_fps.is_empty() {
+            println!(
+                "ratio sequential {} threads/sequential 1 thread: {:.2}x",
+                args.threads,
+                median(par_fps) / seq
+            );
+        }
+        let seq_poses = seq_poses.as_deref().unwrap_or_default();
+        let identical = same(seq_poses, pipe_poses.as_deref().unwrap_or_default())
+            && par_poses.as_deref().is_none_or(|p| same(seq_poses, p));
         println!("poses identical bit for bit: {identical}");
         if !identical {
             return ExitCode::FAILURE;

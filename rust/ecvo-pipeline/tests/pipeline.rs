@@ -337,3 +337,46 @@ fn real_tum_stream_matches_sequential_odometry() {
     }
     assert_eq!(&summary.stats.counters, odo.tracker().counters());
 }
+
+/// At 640x480 ecvo-core splits MOTION and the filter between the pool's threads;
+/// the poses must still be those of the one-thread sequential engine.
+#[test]
+fn full_resolution_tum_stream_matches_one_thread_odometry_at_1_2_and_4_threads() {
+    let Some(dir) = ecvo_io::dataset_for_test("tum_fr1_xyz_full300") else {
+        return;
+    };
+    let seq = ecvo_io::Sequence::open(&dir, None).unwrap();
+    let frames: Vec<ecvo_io::Frame> = (0..20).map(|i| seq.load_frame(i).unwrap()).collect();
+    let config = Config::new(*seq.camera(), ecvo_core::Preset::Pc, ecvo_core::Mode::L2);
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let mut odo = Odometry::new(config.clone()).unwrap();
+    let expected: Vec<_> =
+        one.install(|| frames.iter().map(|f| odo.push(f.view()).unwrap()).collect());
+    for threads in [1, 2, 4] {
+        let pipeline = Pipeline::new(
+            config.clone(),
+            PipelineOptions {
+                threads,
+                keep_trajectory: true,
+                ..PipelineOptions::default()
+            },
+        )
+        .unwrap();
+        for f in &frames {
+            pipeline.push_view(f.view()).unwrap();
+        }
+        let summary = pipeline.finish().unwrap();
+        assert_eq!(summary.trajectory.len(), expected.len());
+        for (i, (r, e)) in summary.trajectory.iter().zip(&expected).enumerate() {
+            assert_eq!(
+                common::bits(&r.pose),
+                common::bits(&e.pose),
+                "frame {i}, {threads} threads"
+            );
+        }
+        assert_eq!(&summary.stats.counters, odo.tracker().counters());
+    }
+}
