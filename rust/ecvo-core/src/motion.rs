@@ -243,6 +243,8 @@ pub struct MotionEstimator {
     chunks: Vec<Vec<Residual>>,
     /// Per-chunk normal equations, merged in order.
     partial: Vec<NormalEquations>,
+    /// Per-chunk weighted errors, added in order.
+    errors: Vec<f64>,
     /// Chunks the last warp filled.
     used: usize,
 }
@@ -267,6 +269,8 @@ impl MotionEstimator {
                 .resize_with(chunks, || Vec::with_capacity(CHUNK));
             self.partial
                 .reserve(chunks.saturating_sub(self.partial.len()));
+            self.errors
+                .reserve(chunks.saturating_sub(self.errors.len()));
         }
     }
 
@@ -324,14 +328,16 @@ impl MotionEstimator {
                 }
                 let s2 = t_scale(&self.chunks[..self.used], nu, sigma2);
                 sigma2 = Some(s2);
-                let ne = self.normal_equations(level, s2, nu, lambda2);
-                let err = ne.error / ne.count as f64;
+                // The error first: a step that made things worse needs no Jacobians.
+                let err = self.weighted_error(s2, nu) / n as f64;
                 if accepted.is_some_and(|a| err > a.error / a.count as f64) {
                     // The last step made things worse: undo it and end this level.
                     t = prev_t;
                     hit_max = false;
                     break;
                 }
+                let ne = self.normal_equations(level, s2, nu, lambda2);
+                debug_assert_eq!(ne.error / ne.count as f64, err);
                 result.iterations[k] = it + 1;
                 accepted = Some(ne);
                 let Some(delta) = ne.solve() else {
@@ -423,6 +429,26 @@ impl MotionEstimator {
         self.chunks[..n].iter().map(Vec::len).sum()
     }
 
+    /// `Σ w e²` over the stored residuals for the scale `sigma2`: the same sum, to the
+    /// bit, as the error [`Self::normal_equations`] returns (pixel order within a
+    /// chunk, chunk order across them).
+    fn weighted_error(&mut self, sigma2: f32, nu: f32) -> f64 {
+        let inv_s2 = 1.0 / sigma2;
+        let sum = |res: &Vec<Residual>| {
+            let mut e = 0.0f64;
+            for r in res {
+                e += (t_weight(r, nu, inv_s2) * r.e2) as f64;
+            }
+            e
+        };
+        map_chunks(&self.chunks[..self.used], &mut self.errors, sum);
+        let mut total = 0.0;
+        for e in &self.errors {
+            total += e;
+        }
+        total
+    }
+
     /// Weights the stored residuals and accumulates the normal equations.
     fn normal_equations(
         &mut self,
@@ -437,9 +463,7 @@ impl MotionEstimator {
         let accumulate = |res: &Vec<Residual>| {
             let mut acc = Accumulator::new();
             for r in res {
-                let depth = r.rz.is_finite();
-                let dims = if depth { 2.0 } else { 1.0 };
-                let w = (nu + dims) / (nu + r.e2 * inv_s2);
+                let w = t_weight(r, nu, inv_s2);
                 let (ji, jz) = jacobians(r, fx, fy);
                 acc.add(&ji, r.ri, w);
                 if let Some(jz) = jz {
@@ -456,6 +480,14 @@ impl MotionEstimator {
         }
         total
     }
+}
+
+/// The t-distribution weight of a residual for the scale `1 / inv_s2` (Kerl et al.):
+/// `(ν + d) / (ν + e² / σ²)`, with `d` its dimension (2 with depth, 1 without).
+#[inline(always)]
+fn t_weight(r: &Residual, nu: f32, inv_s2: f32) -> f32 {
+    let dims = if r.rz.is_finite() { 2.0 } else { 1.0 };
+    (nu + dims) / (nu + r.e2 * inv_s2)
 }
 
 /// `out[k] = f(&chunks[k])`, with rayon when there are enough chunks to split. The
