@@ -1,5 +1,7 @@
 //! A warm pipeline allocates nothing per frame: a counting global allocator watches
-//! frames 20..60 of an offline run after a warm-up of 20 frames.
+//! frames 20..60 of an offline 320x180 run after a warm-up of 20 frames, then frames
+//! 10..30 of a 640x480 run, where ecvo-core also splits MOTION and the filter between
+//! the two compute threads (rayon's `join` keeps its jobs on the stack).
 //!
 //! The one allocation that remains is rayon's, not ours: handing a job to a
 //! `rayon::ThreadPool` from outside it (`install`, as the stages do once per frame)
@@ -68,7 +70,16 @@ static GLOBAL: Counting = Counting;
 
 #[test]
 fn warm_pipeline_does_not_allocate_per_frame() {
+    // One test, so that the two runs never count each other's allocations.
     let (config, frames) = common::synthetic(60, 7);
+    check(config, &frames, 20);
+    let (config, frames) = common::synthetic_640x480(30, 7);
+    check(config, &frames, 10);
+}
+
+/// Runs `frames` through a pipeline and counts the allocations after the first `warm`.
+fn check(config: ecvo_core::Config, frames: &[common::Frame], warm: usize) {
+    let width = config.camera.width;
     let pipeline = Pipeline::new(
         config,
         PipelineOptions {
@@ -90,14 +101,15 @@ fn warm_pipeline_does_not_allocate_per_frame() {
             })
             .unwrap();
     };
-    for f in &frames[..20] {
+    for f in &frames[..warm] {
         push(f);
     }
     pipeline.flush().unwrap();
 
     let geometry_before = pipeline.stats().geometry.frames;
+    ALLOCS.store(0, Ordering::SeqCst);
     COUNTING.store(true, Ordering::SeqCst);
-    for f in &frames[20..] {
+    for f in &frames[warm..] {
         push(f);
     }
     pipeline.flush().unwrap();
@@ -110,18 +122,22 @@ fn warm_pipeline_does_not_allocate_per_frame() {
     // tracker, one per reference frame for the geometry stage. The injector needs a
     // new block every 63 jobs; two stage threads racing for the last slot of a block
     // may both allocate one (the loser frees its copy), hence at most two per 63.
-    let jobs = 2 * 40 + (stats.geometry.frames - geometry_before);
+    let counted = (frames.len() - warm) as u64;
+    let jobs = 2 * counted + (stats.geometry.frames - geometry_before);
     let summary = pipeline.finish().unwrap();
-    assert_eq!(summary.stats.tracked, 60);
+    assert_eq!(summary.stats.tracked, frames.len() as u64);
     assert!(stats.counters.references.iter().sum::<u64>() > 0);
     assert!(stats.cloud_points > 0);
     let seen = &sizes[..(allocs as usize).min(64)];
     assert!(
         seen.iter().all(|&s| s == INJECTOR_BLOCK) && allocs <= 2 * jobs.div_ceil(63),
-        "{allocs} allocations over frames 20..60 ({jobs} jobs injected), sizes {seen:?}; \
-         only rayon injector blocks of {INJECTOR_BLOCK} bytes are expected"
+        "width {width}: {allocs} allocations over frames {warm}..{} ({jobs} jobs injected), \
+         sizes {seen:?}; only rayon injector blocks of {INJECTOR_BLOCK} bytes are expected",
+        frames.len()
     );
     eprintln!(
-        "frames 20..60: {allocs} allocations, all rayon injector blocks ({jobs} jobs injected)"
+        "width {width}, frames {warm}..{}: {allocs} allocations, all rayon injector blocks \
+         ({jobs} jobs injected)",
+        frames.len()
     );
 }

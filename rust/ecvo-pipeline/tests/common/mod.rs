@@ -26,7 +26,19 @@ impl Frame {
 /// The synthetic phone stream (320x180, phone-like depth noise, hand-held path) and
 /// an L2 configuration for it.
 pub fn synthetic(frames: usize, seed: u64) -> (Config, Vec<Frame>) {
-    let seq = SynthSequence::phone_320x180(frames, seed);
+    frames_of(SynthSequence::phone_320x180(frames, seed))
+}
+
+/// The same room and path seen by a 640x480 Kinect-like camera: large enough that
+/// ecvo-core splits its loops between threads.
+pub fn synthetic_640x480(frames: usize, seed: u64) -> (Config, Vec<Frame>) {
+    let mut seq = SynthSequence::phone_320x180(frames, seed);
+    seq.camera = ecvo_synth::SynthCamera::tum_640x480();
+    seq.noise = ecvo_synth::DepthNoise::kinect_like();
+    frames_of(seq)
+}
+
+fn frames_of(seq: SynthSequence) -> (Config, Vec<Frame>) {
     let c = seq.camera;
     let camera = Camera {
         width: c.width,
