@@ -224,19 +224,18 @@ pub const CHUNK: usize = 4096;
 
 /// Fewest chunks one rayon task takes. Handing work to another thread costs tens of
 /// microseconds (waking it, and spinning while waiting for it), so a loop is only
-/// split when each part has at least this many chunks: at 640x480 the finest step
-/// (about 77k points) splits into four tasks, at 320x240 (about 19k) it stays on
-/// the calling thread, where the pipeline's stage overlap already keeps the cores
-/// busy.
-pub const MIN_CHUNKS_PER_TASK: usize = 4;
+/// split when each part has at least this many chunks: at 640x480 the finest step of
+/// the paper's sampling (about 77k points) splits into up to nine tasks and the
+/// middle one (19k) into two; at 320x240 only the finest step (19k) splits, in two.
+pub const MIN_CHUNKS_PER_TASK: usize = 2;
 
 /// Runs `MOTION` and keeps its scratch buffers between calls, so that a warm
 /// estimator does not allocate.
 ///
-/// The per-point work runs over fixed chunks of [`CHUNK`] template points: warping
-/// and the normal equations with rayon (in whatever pool the caller is in) once a
-/// template is large enough, the cheap t-scale passes on the calling thread. The
-/// per-chunk partial sums are added in chunk order.
+/// The per-point work (warping, t-scale passes, weighted error, normal equations)
+/// runs over fixed chunks of [`CHUNK`] template points, with rayon (in whatever pool
+/// the caller is in) once a template is large enough. The per-chunk partial sums
+/// are added in chunk order.
 #[derive(Debug, Default)]
 pub struct MotionEstimator {
     /// Residuals of each chunk of template points.
@@ -245,6 +244,8 @@ pub struct MotionEstimator {
     partial: Vec<NormalEquations>,
     /// Per-chunk weighted errors, added in order.
     errors: Vec<f64>,
+    /// Per-chunk sums of a t-scale pass, added in order.
+    sums: Vec<f64>,
     /// Chunks the last warp filled.
     used: usize,
 }
@@ -271,6 +272,7 @@ impl MotionEstimator {
                 .reserve(chunks.saturating_sub(self.partial.len()));
             self.errors
                 .reserve(chunks.saturating_sub(self.errors.len()));
+            self.sums.reserve(chunks.saturating_sub(self.sums.len()));
         }
     }
 
@@ -326,7 +328,7 @@ impl MotionEstimator {
                     hit_max = false;
                     break;
                 }
-                let s2 = t_scale(&self.chunks[..self.used], nu, sigma2);
+                let s2 = t_scale(&self.chunks[..self.used], &mut self.sums, nu, sigma2);
                 sigma2 = Some(s2);
                 // The error first: a step that made things worse needs no Jacobians.
                 let err = self.weighted_error(s2, nu) / n as f64;
@@ -627,9 +629,10 @@ fn bilinear(s: &[Sample], w: usize, u: f32, v: f32) -> Sample {
 /// The scale σ² of a bivariate t-distribution with `nu` degrees of freedom fitted
 /// to the residuals (in chunks, see [`CHUNK`]) by fixed-point iteration (Kerl et
 /// al.), started from `start` (the previous iteration's scale) when given; pixels
-/// with only a photometric residual count as one dimension. A pass is a few
-/// operations a residual, cheaper than handing it to other threads: it runs here.
-fn t_scale(chunks: &[Vec<Residual>], nu: f32, start: Option<f32>) -> f32 {
+/// with only a photometric residual count as one dimension. A pass sums each chunk
+/// (in f32 over short runs, then in f64), with rayon when there are enough chunks,
+/// and adds the chunks in order; `sums` is scratch.
+fn t_scale(chunks: &[Vec<Residual>], sums: &mut Vec<f64>, nu: f32, start: Option<f32>) -> f32 {
     let dims: usize = chunks
         .iter()
         .flatten()
@@ -645,19 +648,23 @@ fn t_scale(chunks: &[Vec<Residual>], nu: f32, start: Option<f32>) -> f32 {
     };
     for _ in 0..20 {
         let inv = (1.0 / s2) as f32;
-        // Sum in f32 over short runs, then in f64.
-        let acc: f64 = chunks
-            .iter()
-            .flat_map(|c| c.chunks(256))
-            .map(|run| {
-                run.iter()
-                    .map(|r| {
-                        let d = if r.rz.is_finite() { 2.0 } else { 1.0 };
-                        r.e2 * (nu + d) / (nu + r.e2 * inv)
-                    })
-                    .sum::<f32>() as f64
-            })
-            .sum();
+        let pass = |c: &Vec<Residual>| {
+            let mut acc = 0.0f64;
+            for run in c.chunks(256) {
+                let mut part = 0.0f32;
+                for r in run {
+                    let d = if r.rz.is_finite() { 2.0 } else { 1.0 };
+                    part += r.e2 * (nu + d) / (nu + r.e2 * inv);
+                }
+                acc += part as f64;
+            }
+            acc
+        };
+        map_chunks(chunks, sums, pass);
+        let mut acc = 0.0f64;
+        for p in sums.iter() {
+            acc += p;
+        }
         let next = (acc / dims).max(1e-12);
         let done = (next - s2).abs() < 1e-3 * s2;
         s2 = next;
@@ -796,10 +803,11 @@ mod tests {
                 }
             })
             .collect();
-        let s2 = t_scale(std::slice::from_ref(&res), 5.0, None);
+        let mut sums = Vec::new();
+        let s2 = t_scale(std::slice::from_ref(&res), &mut sums, 5.0, None);
         assert!((s2 / (s * s) - 1.0).abs() < 0.05, "sigma² {s2}");
-        assert_eq!(t_scale(&[], 5.0, None), 1.0);
-        let warm = t_scale(std::slice::from_ref(&res), 5.0, Some(0.01));
+        assert_eq!(t_scale(&[], &mut sums, 5.0, None), 1.0);
+        let warm = t_scale(std::slice::from_ref(&res), &mut sums, 5.0, Some(0.01));
         assert!((warm / s2 - 1.0).abs() < 0.01, "warm start {warm} vs {s2}");
     }
 
