@@ -79,7 +79,8 @@ pub struct BilateralConfig {
     pub radius: usize,
     /// Spatial standard deviation in pixels.
     pub sigma_space_px: f32,
-    /// Range standard deviation as a fraction of the centre depth (noise grows with depth).
+    /// Range standard deviation as a fraction of the centre depth (noise grows with
+    /// depth), in (0, 0.35].
     pub sigma_depth_rel: f32,
 }
 
@@ -253,10 +254,12 @@ impl Config {
                     format!("{} is not positive", b.sigma_space_px),
                 );
             }
-            if !(b.sigma_depth_rel > 0.0 && b.sigma_depth_rel.is_finite()) {
+            // Above 0.35 a missing neighbour (depth 0) would get a range weight and
+            // pull the smoothed depth towards 0.
+            if !(b.sigma_depth_rel > 0.0 && b.sigma_depth_rel <= 0.35) {
                 return bad(
                     "filter.bilateral.sigma_depth_rel",
-                    format!("{} is not positive", b.sigma_depth_rel),
+                    format!("{} is not in (0, 0.35]", b.sigma_depth_rel),
                 );
             }
         }

@@ -4,27 +4,29 @@
 mod common;
 
 use ecvo_core::motion::{CHUNK, MIN_CHUNKS_PER_TASK};
-use ecvo_core::{FrameOutput, Mode, Odometry};
+use ecvo_core::{Config, FrameOutput, Mode, Odometry, ReferenceLevel};
 use ecvo_synth::{DepthNoise, SynthCamera, SynthSequence};
 
-/// A noisy 640x480 stream: large enough that the loops are split between threads.
-fn stream() -> SynthSequence {
-    let mut s = SynthSequence::phone_320x180(40, 5);
+/// A noisy 640x480 stream, rendered once: large enough that the loops are split
+/// between threads.
+fn stream() -> (SynthSequence, Vec<ecvo_synth::SynthFrame>) {
+    let mut s = SynthSequence::phone_320x180(24, 5);
     s.camera = SynthCamera::tum_640x480();
     s.noise = DepthNoise::kinect_like();
-    s
+    let frames = (0..s.frames).map(|i| s.frame(i)).collect();
+    (s, frames)
 }
 
-fn run(seq: &SynthSequence, threads: usize) -> Vec<FrameOutput> {
+fn run(cfg: &Config, frames: &[ecvo_synth::SynthFrame], threads: usize) -> Vec<FrameOutput> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .unwrap();
-    let mut odo = Odometry::new(common::config(seq, Mode::L2)).unwrap();
+    let mut odo = Odometry::new(cfg.clone()).unwrap();
     pool.install(|| {
-        (0..seq.frames)
-            .map(|i| {
-                let f = seq.frame(i);
+        frames
+            .iter()
+            .map(|f| {
                 odo.push(ecvo_core::FrameView {
                     timestamp: f.timestamp,
                     intensity: &f.intensity,
@@ -42,8 +44,13 @@ fn bits(p: &ecvo_core::Pose) -> Vec<u64> {
 
 #[test]
 fn poses_do_not_depend_on_the_thread_count() {
-    let seq = stream();
-    let cfg = common::config(&seq, Mode::L2);
+    let (seq, frames) = stream();
+    let mut cfg = common::config(&seq, Mode::L2);
+    // Tight reference levels, so that a short stream corrects at both levels.
+    cfg.reference_levels = vec![
+        ReferenceLevel::mm_deg(10.0, 1.0),
+        ReferenceLevel::mm_deg(30.0, 3.0),
+    ];
     // The finest step's template must be big enough for MOTION to split its loops,
     // or this test would compare the sequential path with itself.
     let (frame, _) = common::prepared(&seq, 0, &cfg);
@@ -52,13 +59,14 @@ fn poses_do_not_depend_on_the_thread_count() {
         finest >= 2 * MIN_CHUNKS_PER_TASK * CHUNK,
         "{finest} template points do not split"
     );
-    let one = run(&seq, 1);
+    let one = run(&cfg, &frames, 1);
     assert!(
-        one.iter().any(|o| o.reference_levels > 0),
-        "the stream must exercise error correction"
+        one.iter().any(|o| o.reference_levels > 1),
+        "the stream must exercise both levels of error correction"
     );
-    for threads in [2, 3, 4] {
-        let many = run(&seq, threads);
+    // 3 threads split unevenly, 4 more finely than 2 would.
+    for threads in [3, 4] {
+        let many = run(&cfg, &frames, threads);
         for (i, (a, b)) in one.iter().zip(&many).enumerate() {
             assert_eq!(bits(&a.pose), bits(&b.pose), "frame {i}, {threads} threads");
             assert_eq!(a.state, b.state);
