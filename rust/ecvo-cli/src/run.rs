@@ -409,6 +409,7 @@ fn pipeline_json(st: &ecvo_pipeline::PipelineStats) -> serde_json::Value {
         "tracked": st.tracked,
         "dropped": st.dropped,
         "failed_preparations": st.failed_preparations,
+        "frame_to_frame_ahead": { "computed": st.ahead_computed, "used": st.ahead_used },
         "stages": {
             "filter": stage(&st.filter),
             "tracker": stage(&st.tracker),

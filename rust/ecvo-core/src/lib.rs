@@ -30,7 +30,7 @@ pub use error::{Error, Result};
 pub use motion::{MotionEstimator, MotionResult};
 pub use nalgebra;
 pub use prepare::{PreparedFrame, Preparer};
-pub use tracker::{Counters, FrameOutput, Odometry, Tracker, TrackingState, comp};
+pub use tracker::{Counters, FrameOutput, Odometry, Tracker, TrackingState, comp, frame_to_frame};
 
 /// A rigid motion in double precision. Poses are camera-to-world; the world is the
 /// first camera.

@@ -150,6 +150,19 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
 
     /// Tracks one prepared frame (Figure 1(b)).
     pub fn track(&mut self, frame: F) -> FrameOutput {
+        self.track_with(frame, |_| None)
+    }
+
+    /// Tracks one prepared frame whose [A] may have been computed ahead of time:
+    /// `ahead` is given the previous frame the tracker registers against and returns
+    /// [`frame_to_frame`]`(frame, previous)` if it was computed for exactly that pair,
+    /// `None` otherwise (then the tracker computes it). [A] depends on nothing but
+    /// the two frames, so the output is the same either way, bit for bit.
+    pub fn track_with(
+        &mut self,
+        frame: F,
+        ahead: impl FnOnce(&F) -> Option<MotionResult>,
+    ) -> FrameOutput {
         let index = self.next_index;
         self.next_index += 1;
         self.counters.frames += 1;
@@ -170,9 +183,10 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         };
 
         // [A] frame to frame.
-        let f2f =
-            self.estimator
-                .motion(&frame, &prev.frame, &Pose::identity(), &self.config.motion);
+        let f2f = match ahead(&prev.frame) {
+            Some(r) => r,
+            None => frame_to_frame(&mut self.estimator, &frame, &prev.frame, &self.config),
+        };
         out.motion_estimations += 1;
         self.counters.motion_estimations += 1;
         out.frame_to_frame = Some(f2f);
@@ -244,6 +258,19 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         }
         self.prev = Some(Kept { frame, pose, index });
     }
+}
+
+/// [A] of Figure 1(b): `MOTION(Fc, Fp, I)`, the motion from the current frame to the
+/// previous one from the identity. It depends on the two frames alone, so it may run
+/// before the tracker reaches `current` (the pipeline's filter stage does so when the
+/// tracker is behind) and be handed to [`Tracker::track_with`].
+pub fn frame_to_frame(
+    estimator: &mut MotionEstimator,
+    current: &PreparedFrame,
+    previous: &PreparedFrame,
+    config: &Config,
+) -> MotionResult {
+    estimator.motion(current, previous, &Pose::identity(), &config.motion)
 }
 
 /// The sequential engine: prepares each frame and tracks it, recycling prepared

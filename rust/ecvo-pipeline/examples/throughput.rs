@@ -212,7 +212,8 @@ fn main() -> ExitCode {
         );
         println!(
             "  per frame: filter {:.2} ms (median {:.2}), tracker {:.2} ms (median {:.2}), \
-             total {:.2} ms; queues max input {} tracker {}; motion estimations {}, references {:?}",
+             total {:.2} ms; queues max input {} tracker {}; motion estimations {}, references {:?}; \
+             [A] computed ahead by the filter stage for {} frames, used for {}",
             st.filter.mean_ms,
             st.filter.median_ms,
             st.tracker.mean_ms,
@@ -222,6 +223,8 @@ fn main() -> ExitCode {
             st.tracker_queue.max_depth,
             st.counters.motion_estimations,
             st.counters.references,
+            st.ahead_computed,
+            st.ahead_used,
         );
     }
     if !seq_fps.is_empty() && !pipe_fps.is_empty() {

@@ -20,7 +20,14 @@
 //!   `rayon::ThreadPool` of [`PipelineOptions::threads`] threads (`pool.install`), so
 //!   that number bounds all the computing the pipeline does, including any
 //!   rayon-parallel loop inside ecvo-core. One thread runs the stages one at a time;
-//!   two let filter and tracker overlap.
+//!   two let filter and tracker overlap, and at 640x480 a free thread also takes
+//!   chunks of the other stage's loops.
+//! - **Load sharing**: when the tracker is behind (its queue is full, so the filter
+//!   would wait anyway), the filter stage also computes the new frame's [A],
+//!   `frame_to_frame(current, previous)`, which depends on the two frames alone; the
+//!   tracker uses it when that previous frame is still its previous frame (not
+//!   lost, not dropped) and computes it itself otherwise
+//!   ([`PipelineStats::ahead_computed`], [`PipelineStats::ahead_used`]).
 //! - **Frame pool**: raw input buffers and prepared frames are pooled and reused; a
 //!   prepared frame is shared by reference counting ([`PooledFrame`], the handle the
 //!   tracker keeps as previous and reference frame) and returns to the pool when the
@@ -35,7 +42,9 @@
 //!   oldest waiting frame when the tracker falls behind, so latency stays bounded.
 //! - **Determinism**: offline, the poses are bit-for-bit those of the sequential
 //!   [`ecvo_core::Odometry`] on the same stream, whatever the number of threads:
-//!   every frame is prepared and tracked exactly once, in order, by the same code.
+//!   every frame is prepared and tracked exactly once, in order, by the same code
+//!   (ecvo-core's parallel loops sum over fixed chunks in a fixed order, and an [A]
+//!   computed ahead is the same computation on the same two frames).
 //! - **Failure**: a panic in a stage is caught, closes every queue (so nothing
 //!   waits for it) and is returned to the caller as [`Error::StagePanicked`] by the
 //!   next `push`, `flush` or `finish`. Dropping a pipeline stops and joins every
@@ -73,7 +82,8 @@ use std::time::{Duration, Instant};
 
 use crossbeam_channel::{Receiver, SendTimeoutError, Sender, TrySendError};
 use ecvo_core::{
-    Camera, Config, Counters, FrameOutput, FrameView, Pose, Preparer, Tracker, TrackingState,
+    Camera, Config, Counters, FrameOutput, FrameView, MotionEstimator, Pose, Preparer, Tracker,
+    TrackingState, frame_to_frame,
 };
 
 pub use geometry::{CloudPoint, GeometryOptions};
@@ -81,7 +91,7 @@ pub use pool::PooledFrame;
 pub use stats::{PipelineStats, PoolStats, QueueStats, StageStats};
 
 use geometry::{Cloud, stage_points};
-use pool::{FrameMeta, FramePool};
+use pool::{Ahead, FrameMeta, FramePool};
 use queue::{Queue, lock};
 use stats::{Histogram, copy_counters};
 
@@ -154,8 +164,9 @@ pub enum Admission {
 #[derive(Clone, Debug)]
 pub struct PipelineOptions {
     /// Compute threads of the pipeline's rayon pool, which all stages share (1..=256).
-    /// 2 lets the filter and the tracker overlap; more only helps if ecvo-core
-    /// parallelises inside a stage. On big.LITTLE phones, count the big cores.
+    /// 2 lets the filter and the tracker overlap; more help only where ecvo-core
+    /// splits its loops (images of 640x480 and up). On big.LITTLE phones, count the
+    /// big cores.
     pub threads: usize,
     /// Offline (lossless) or live (bounded latency).
     pub admission: Admission,
@@ -307,6 +318,8 @@ struct Progress {
     geometry_done: u64,
     geometry_skipped: u64,
     outputs_discarded: u64,
+    ahead_computed: u64,
+    ahead_used: u64,
     first_push: Option<Instant>,
     last_tracked: Option<Instant>,
 }
@@ -541,8 +554,9 @@ impl Pipeline {
         let q = options.queue_capacity;
         let geometry_frames = if options.geometry.is_some() { q + 1 } else { 0 };
         // Previous + one per level + the one being tracked + the tracker queue + the
-        // one being prepared + the geometry queue and the one being added.
-        let pool_capacity = levels + 1 + 1 + q + 1 + geometry_frames;
+        // one being prepared + the filter's previous frame (kept to compute [A] ahead)
+        // + the geometry queue and the one being added.
+        let pool_capacity = levels + 1 + 1 + q + 1 + 1 + geometry_frames;
 
         // Counted from the start, so that a pipeline dropped before its workers
         // have even started still waits for them.
@@ -629,7 +643,10 @@ impl Pipeline {
             options,
         };
         let c = compute.clone();
-        pipeline.spawn(Stage::Filter, move |s| filter_stage(s, preparer, &c))?;
+        let filter_config = pipeline.config.clone();
+        pipeline.spawn(Stage::Filter, move |s| {
+            filter_stage(s, preparer, &filter_config, &c)
+        })?;
         let c = compute.clone();
         pipeline.spawn(Stage::Tracker, move |s| {
             tracker_stage(s, tracker, &c, out_tx)
@@ -856,6 +873,8 @@ impl Pipeline {
                     p.failed_preparations,
                     p.geometry_skipped,
                     p.outputs_discarded,
+                    p.ahead_computed,
+                    p.ahead_used,
                 ],
                 wall,
             )
@@ -868,6 +887,8 @@ impl Pipeline {
             failed_preparations,
             geometry_skipped,
             outputs_discarded,
+            ahead_computed,
+            ahead_used,
         ] = progress;
         PipelineStats {
             filter: lock(&s.timers.filter).summary(),
@@ -883,6 +904,8 @@ impl Pipeline {
             failed_preparations,
             geometry_skipped,
             outputs_discarded,
+            ahead_computed,
+            ahead_used,
             input_queue: s.input.stats(),
             tracker_queue: s.prepared.stats(),
             geometry_queue: s.to_geometry.stats(),
@@ -949,8 +972,29 @@ impl Drop for Pipeline {
     }
 }
 
-fn filter_stage(s: &Shared, mut preparer: Preparer, compute: &rayon::ThreadPool) {
-    while let Some(raw) = s.input.pop() {
+/// The filter stage: prepares each frame. While the tracker is behind (its queue is
+/// not empty), it also computes the frame's [A] against the frame it prepared just
+/// before, which is the tracker's previous frame unless that one is lost: the
+/// tracker then only corrects against its references, and the two stages share the
+/// work more evenly. [A] depends on the two frames alone, so the poses are the same.
+fn filter_stage(s: &Shared, mut preparer: Preparer, config: &Config, compute: &rayon::ThreadPool) {
+    let mut estimator =
+        MotionEstimator::with_capacity(ecvo_core::prepare::max_template_points(config));
+    // The frame prepared last, while the next one may still follow at once.
+    let mut last: Option<PooledFrame> = None;
+    loop {
+        let raw = match s.input.try_pop() {
+            Some(raw) => raw,
+            None => {
+                // Nothing waiting: let the last frame go (only the tracker keeps frames
+                // while the pipeline is idle), then wait.
+                last = None;
+                match s.input.pop() {
+                    Some(raw) => raw,
+                    None => break,
+                }
+            }
+        };
         if s.aborted() {
             break;
         }
@@ -965,15 +1009,25 @@ fn filter_stage(s: &Shared, mut preparer: Preparer, compute: &rayon::ThreadPool)
             depth: &raw.depth,
         };
         let prepared = &mut slot_mut.frame;
+        // The tracker is behind when its queue is full: this frame would wait anyway.
+        let behind = s.prepared.len() >= s.prepared.capacity();
         // Timed inside the pool: a stage's time is its work, not its wait for a thread.
-        let (result, filtered_in) = compute.install(|| {
+        let (result, ahead, filtered_in) = compute.install(|| {
             let t0 = Instant::now();
             let r = preparer.prepare_into(view, prepared);
-            (r, t0.elapsed())
+            let ahead = match (&r, &last) {
+                (Ok(()), Some(prev)) if behind => Some(Ahead {
+                    against: prev.sequence(),
+                    result: frame_to_frame(&mut estimator, prepared, prev, config),
+                }),
+                _ => None,
+            };
+            (r, ahead, t0.elapsed())
         });
         slot_mut.meta = FrameMeta {
             sequence: raw.sequence,
             pushed_at: raw.pushed_at,
+            ahead,
         };
         lock(&s.timers.filter).record(filtered_in);
         s.give_raw(raw);
@@ -983,7 +1037,11 @@ fn filter_stage(s: &Shared, mut preparer: Preparer, compute: &rayon::ThreadPool)
             s.update_progress(|p| p.failed_preparations += 1);
             continue;
         }
+        if ahead.is_some() {
+            s.update_progress(|p| p.ahead_computed += 1);
+        }
         let frame = s.frames.share(slot);
+        last = Some(frame.clone());
         match s.admission {
             Admission::Offline => {
                 if s.prepared.push_blocking(frame).is_err() {
@@ -1016,11 +1074,19 @@ fn tracker_stage(
         let meta = frame.meta();
         s.hook(Stage::Tracker, meta.sequence);
         let for_geometry = s.geometry.is_some().then(|| frame.clone());
+        let mut used_ahead = false;
         let (out, tracked_in) = compute.install(|| {
             let t0 = Instant::now();
-            let out = tracker.track(frame);
+            let out = tracker.track_with(frame, |prev| {
+                let a = meta.ahead.filter(|a| a.against == prev.sequence())?;
+                used_ahead = true;
+                Some(a.result)
+            });
             (out, t0.elapsed())
         });
+        if used_ahead {
+            s.update_progress(|p| p.ahead_used += 1);
+        }
 
         let anchored = out.index == 0 || out.reanchored;
         let reference_levels = if anchored {

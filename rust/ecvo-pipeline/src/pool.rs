@@ -27,6 +27,17 @@ pub(crate) struct FrameMeta {
     pub sequence: u64,
     /// When `push` was called.
     pub pushed_at: Instant,
+    /// [A] for this frame, computed by the filter stage while the tracker was behind.
+    pub ahead: Option<Ahead>,
+}
+
+/// `frame_to_frame(this frame, the frame of sequence `against`)`, computed ahead.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Ahead {
+    /// Sequence of the previous frame it registered against.
+    pub against: u64,
+    /// The result.
+    pub result: ecvo_core::MotionResult,
 }
 
 /// One pooled frame.
@@ -123,6 +134,7 @@ impl FramePool {
                     meta: FrameMeta {
                         sequence: 0,
                         pushed_at: Instant::now(),
+                        ahead: None,
                     },
                 })
             })

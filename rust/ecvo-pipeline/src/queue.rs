@@ -106,6 +106,16 @@ impl<T> Queue<T> {
         Ok(())
     }
 
+    /// The most items it holds.
+    pub(crate) fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// Items waiting now.
+    pub(crate) fn len(&self) -> usize {
+        lock(&self.inner).items.len()
+    }
+
     /// Removes the oldest item without waiting.
     pub(crate) fn try_pop(&self) -> Option<T> {
         let item = lock(&self.inner).items.pop_front();

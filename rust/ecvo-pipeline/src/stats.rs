@@ -158,6 +158,12 @@ pub struct PipelineStats {
     pub geometry_skipped: u64,
     /// Outputs not sent because the output queue was full (live mode only).
     pub outputs_discarded: u64,
+    /// Frames whose [A] (`frame_to_frame`) the filter stage computed ahead, because
+    /// the tracker was behind.
+    pub ahead_computed: u64,
+    /// Of those, the ones the tracker used (the others were registered against an
+    /// older frame, the previous one having been lost or dropped).
+    pub ahead_used: u64,
     /// Input queue (raw frames waiting for the filter).
     pub input_queue: QueueStats,
     /// Tracker queue (prepared frames waiting for the tracker).

@@ -234,3 +234,72 @@ fn a_panicking_fill_returns_the_buffer_and_the_pipeline_goes_on() {
     }
     assert_eq!(p.finish().unwrap().stats.tracked, 3);
 }
+
+/// With a slow tracker the filter stage computes [A] ahead; a frame whose previous
+/// frame was lost must not use the [A] computed against it. Either way the poses
+/// are those of the sequential engine, bit for bit.
+#[test]
+fn frame_to_frame_computed_ahead_gives_the_sequential_poses_even_around_lost_frames() {
+    let (config, mut frames) = stream(40);
+    // Frames 12, 13 and 25 are blank: they are lost, and the frames after them
+    // register against an older frame than the one the filter stage used.
+    for k in [12, 13, 25] {
+        frames[k].depth.fill(0);
+        frames[k].intensity.fill(128);
+    }
+    let mut odo = ecvo_core::Odometry::new(config.clone()).unwrap();
+    let expected: Vec<_> = frames
+        .iter()
+        .map(|f| {
+            odo.push(FrameView {
+                timestamp: f.timestamp,
+                intensity: &f.intensity,
+                depth: &f.depth,
+            })
+            .unwrap()
+        })
+        .collect();
+    assert_eq!(
+        odo.tracker().counters().lost_frames,
+        3,
+        "{:?}",
+        odo.tracker().counters()
+    );
+    let stats = within_a_minute(move || {
+        let p = Pipeline::new(
+            config,
+            PipelineOptions {
+                threads: 2,
+                keep_trajectory: true,
+                test_hooks: TestHooks {
+                    delay: Some((Stage::Tracker, Duration::from_millis(4))),
+                    ..TestHooks::default()
+                },
+                ..PipelineOptions::default()
+            },
+        )
+        .unwrap();
+        for f in &frames {
+            push(&p, f).unwrap();
+        }
+        let summary = p.finish().unwrap();
+        assert_eq!(summary.trajectory.len(), expected.len());
+        for (i, (r, e)) in summary.trajectory.iter().zip(&expected).enumerate() {
+            assert_eq!(
+                r.pose.to_homogeneous().map(f64::to_bits),
+                e.pose.to_homogeneous().map(f64::to_bits),
+                "frame {i}"
+            );
+            assert_eq!(r.state, e.state, "frame {i}");
+        }
+        summary.stats
+    });
+    assert!(stats.ahead_used > 10, "{} used", stats.ahead_used);
+    // The frames after a lost one: computed against it, and not used.
+    assert!(
+        stats.ahead_computed > stats.ahead_used,
+        "{} computed, {} used",
+        stats.ahead_computed,
+        stats.ahead_used
+    );
+}
