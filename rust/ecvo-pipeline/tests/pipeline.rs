@@ -310,45 +310,16 @@ fn bad_frames_and_options_are_errors() {
     assert_eq!(pipeline.finish().unwrap().stats.tracked, 1);
 }
 
-#[test]
-fn real_tum_stream_matches_sequential_odometry() {
-    let Some(dir) = ecvo_io::dataset_for_test("tum_fr1_xyz_half") else {
+/// The first `n` frames of a shared TUM sequence through the pipeline at each of
+/// `threads` (with geometry on), against `Odometry` on a one-thread rayon pool, bit
+/// for bit. Nothing to do when the sequence is absent (`dataset_for_test` says so,
+/// or fails the test when datasets are required).
+fn tum_stream_matches_one_thread_odometry(name: &str, n: usize, threads: &[usize]) {
+    let Some(dir) = ecvo_io::dataset_for_test(name) else {
         return;
     };
     let seq = ecvo_io::Sequence::open(&dir, None).unwrap();
-    let frames: Vec<ecvo_io::Frame> = (0..40).map(|i| seq.load_frame(i).unwrap()).collect();
-    let config = Config::new(*seq.camera(), ecvo_core::Preset::Pc, ecvo_core::Mode::L2);
-    let mut odo = Odometry::new(config.clone()).unwrap();
-    let expected: Vec<_> = frames.iter().map(|f| odo.push(f.view()).unwrap()).collect();
-    let pipeline = Pipeline::new(
-        config,
-        PipelineOptions {
-            keep_trajectory: true,
-            geometry: Some(GeometryOptions::default()),
-            ..PipelineOptions::default()
-        },
-    )
-    .unwrap();
-    for f in &frames {
-        pipeline.push_view(f.view()).unwrap();
-    }
-    let summary = pipeline.finish().unwrap();
-    assert_eq!(summary.trajectory.len(), expected.len());
-    for (r, e) in summary.trajectory.iter().zip(&expected) {
-        assert_eq!(common::bits(&r.pose), common::bits(&e.pose));
-    }
-    assert_eq!(&summary.stats.counters, odo.tracker().counters());
-}
-
-/// At 640x480 ecvo-core splits MOTION and the filter between the pool's threads;
-/// the poses must still be those of the one-thread sequential engine.
-#[test]
-fn full_resolution_tum_stream_matches_one_thread_odometry_at_1_2_and_4_threads() {
-    let Some(dir) = ecvo_io::dataset_for_test("tum_fr1_xyz_full300") else {
-        return;
-    };
-    let seq = ecvo_io::Sequence::open(&dir, None).unwrap();
-    let frames: Vec<ecvo_io::Frame> = (0..20).map(|i| seq.load_frame(i).unwrap()).collect();
+    let frames: Vec<ecvo_io::Frame> = (0..n).map(|i| seq.load_frame(i).unwrap()).collect();
     let config = Config::new(*seq.camera(), ecvo_core::Preset::Pc, ecvo_core::Mode::L2);
     let one = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
@@ -357,12 +328,13 @@ fn full_resolution_tum_stream_matches_one_thread_odometry_at_1_2_and_4_threads()
     let mut odo = Odometry::new(config.clone()).unwrap();
     let expected: Vec<_> =
         one.install(|| frames.iter().map(|f| odo.push(f.view()).unwrap()).collect());
-    for threads in [1, 2, 4] {
+    for &threads in threads {
         let pipeline = Pipeline::new(
             config.clone(),
             PipelineOptions {
                 threads,
                 keep_trajectory: true,
+                geometry: Some(GeometryOptions::default()),
                 ..PipelineOptions::default()
             },
         )
@@ -376,9 +348,21 @@ fn full_resolution_tum_stream_matches_one_thread_odometry_at_1_2_and_4_threads()
             assert_eq!(
                 common::bits(&r.pose),
                 common::bits(&e.pose),
-                "frame {i}, {threads} threads"
+                "{name} frame {i}, {threads} threads"
             );
         }
         assert_eq!(&summary.stats.counters, odo.tracker().counters());
     }
+}
+
+#[test]
+fn real_tum_stream_matches_sequential_odometry() {
+    tum_stream_matches_one_thread_odometry("tum_fr1_xyz_half", 40, &[2]);
+}
+
+/// At 640x480 ecvo-core splits MOTION and the filter between the pool's threads;
+/// the poses must still be those of the one-thread sequential engine.
+#[test]
+fn full_resolution_tum_stream_matches_one_thread_odometry_at_1_2_and_4_threads() {
+    tum_stream_matches_one_thread_odometry("tum_fr1_xyz_full300", 20, &[1, 2, 4]);
 }
