@@ -1009,12 +1009,12 @@ fn filter_stage(s: &Shared, mut preparer: Preparer, config: &Config, compute: &r
             depth: &raw.depth,
         };
         let prepared = &mut slot_mut.frame;
-        // The tracker is behind when its queue is full: this frame would wait anyway.
-        let behind = s.prepared.len() >= s.prepared.capacity();
         // Timed inside the pool: a stage's time is its work, not its wait for a thread.
         let (result, ahead, filtered_in) = compute.install(|| {
             let t0 = Instant::now();
             let r = preparer.prepare_into(view, prepared);
+            // The tracker is behind when its queue is full: this frame would wait.
+            let behind = s.prepared.len() >= s.prepared.capacity();
             let ahead = match (&r, &last) {
                 (Ok(()), Some(prev)) if behind => Some(Ahead {
                     against: prev.sequence(),
