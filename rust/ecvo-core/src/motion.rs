@@ -166,8 +166,7 @@ impl Accumulator {
     }
 
     #[inline(always)]
-    fn end_pixel(&mut self, error: f32) {
-        self.total.error += error as f64;
+    fn end_pixel(&mut self) {
         self.total.count += 1;
         self.run += 1;
         if self.run == Self::RUN {
@@ -331,15 +330,15 @@ impl MotionEstimator {
                 let s2 = t_scale(&self.chunks[..self.used], &mut self.sums, nu, sigma2);
                 sigma2 = Some(s2);
                 // The error first: a step that made things worse needs no Jacobians.
-                let err = self.weighted_error(s2, nu) / n as f64;
+                let error = self.weighted_error(s2, nu);
+                let err = error / n as f64;
                 if accepted.is_some_and(|a| err > a.error / a.count as f64) {
                     // The last step made things worse: undo it and end this level.
                     t = prev_t;
                     hit_max = false;
                     break;
                 }
-                let ne = self.normal_equations(level, s2, nu, lambda2);
-                debug_assert_eq!(ne.error / ne.count as f64, err);
+                let ne = self.normal_equations(level, s2, nu, lambda2, error);
                 result.iterations[k] = it + 1;
                 accepted = Some(ne);
                 let Some(delta) = ne.solve() else {
@@ -417,7 +416,7 @@ impl MotionEstimator {
         self.reserve(n);
         self.used = n;
         let bufs = &mut self.chunks[..n];
-        if n < 2 * MIN_CHUNKS_PER_TASK {
+        if !splits(n) {
             for (pts, buf) in points.chunks(CHUNK).zip(bufs.iter_mut()) {
                 warp.run(pts, buf);
             }
@@ -431,8 +430,7 @@ impl MotionEstimator {
         self.chunks[..n].iter().map(Vec::len).sum()
     }
 
-    /// `Σ w e²` over the stored residuals for the scale `sigma2`: the same sum, to the
-    /// bit, as the error [`Self::normal_equations`] returns (pixel order within a
+    /// `Σ w e²` over the stored residuals for the scale `sigma2` (pixel order within a
     /// chunk, chunk order across them).
     fn weighted_error(&mut self, sigma2: f32, nu: f32) -> f64 {
         let inv_s2 = 1.0 / sigma2;
@@ -451,13 +449,15 @@ impl MotionEstimator {
         total
     }
 
-    /// Weights the stored residuals and accumulates the normal equations.
+    /// Weights the stored residuals and accumulates the normal equations; `error` is
+    /// their [`Self::weighted_error`], computed first.
     fn normal_equations(
         &mut self,
         level: &crate::prepare::ImageLevel,
         sigma2: f32,
         nu: f32,
         lambda2: f32,
+        error: f64,
     ) -> NormalEquations {
         let cam = level.camera();
         let (fx, fy) = (cam.fx as f32, cam.fy as f32);
@@ -471,7 +471,7 @@ impl MotionEstimator {
                 if let Some(jz) = jz {
                     acc.add(&jz, r.rz, w * lambda2);
                 }
-                acc.end_pixel(w * r.e2);
+                acc.end_pixel();
             }
             acc.finish()
         };
@@ -480,6 +480,7 @@ impl MotionEstimator {
         for p in &self.partial {
             total.merge(p);
         }
+        total.error = error;
         total
     }
 }
@@ -492,6 +493,12 @@ fn t_weight(r: &Residual, nu: f32, inv_s2: f32) -> f32 {
     (nu + dims) / (nu + r.e2 * inv_s2)
 }
 
+/// True when a loop over `chunks` chunks is worth handing to rayon: each of at least
+/// two tasks gets [`MIN_CHUNKS_PER_TASK`] chunks.
+fn splits(chunks: usize) -> bool {
+    chunks >= 2 * MIN_CHUNKS_PER_TASK
+}
+
 /// `out[k] = f(&chunks[k])`, with rayon when there are enough chunks to split. The
 /// results stay in chunk order, so what the caller sums does not depend on the
 /// number of threads.
@@ -500,7 +507,7 @@ fn map_chunks<T: Send>(
     out: &mut Vec<T>,
     f: impl Fn(&Vec<Residual>) -> T + Sync + Send,
 ) {
-    if chunks.len() < 2 * MIN_CHUNKS_PER_TASK {
+    if !splits(chunks.len()) {
         out.clear();
         out.extend(chunks.iter().map(f));
     } else {
