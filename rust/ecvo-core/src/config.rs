@@ -127,10 +127,17 @@ pub struct MotionLevel {
 /// The coarse-to-fine schedules the engine knows by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Schedule {
-    /// The paper's: every 8th, 4th, then 2nd pixel of the full-resolution image.
+    /// The paper's: every 8th, 4th, then 2nd pixel of the full-resolution image. Every
+    /// step looks the warped points up in the full-resolution image, so the basin of
+    /// convergence is about one full-resolution pixel of gradient wide.
     PaperSampling,
-    /// A 2x2-averaged image pyramid, coarsest first, down to full resolution.
+    /// A 2x2-averaged image pyramid, coarsest first (1/8 resolution), down to every
+    /// pixel of the full-resolution image.
     Pyramid,
+    /// The pyramid from 1/8 resolution, every pixel down to half resolution, then
+    /// every second pixel of the full-resolution image: the basin of the pyramid at
+    /// the cost of the paper's sampling plus the coarse levels.
+    PyramidStride2,
 }
 
 impl Schedule {
@@ -144,8 +151,71 @@ impl Schedule {
         match self {
             Schedule::PaperSampling => vec![l(0, 8, 20), l(0, 4, 15), l(0, 2, 10)],
             Schedule::Pyramid => vec![l(3, 1, 20), l(2, 1, 15), l(1, 1, 10), l(0, 1, 8)],
+            Schedule::PyramidStride2 => {
+                vec![l(3, 1, 20), l(2, 1, 15), l(1, 1, 10), l(0, 2, 8)]
+            }
         }
     }
+
+    /// The name the command line uses.
+    pub fn name(self) -> &'static str {
+        match self {
+            Schedule::PaperSampling => "paper",
+            Schedule::Pyramid => "pyramid",
+            Schedule::PyramidStride2 => "pyramid-stride2",
+        }
+    }
+}
+
+impl std::str::FromStr for Schedule {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "paper" => Ok(Schedule::PaperSampling),
+            "pyramid" => Ok(Schedule::Pyramid),
+            "pyramid-stride2" => Ok(Schedule::PyramidStride2),
+            _ => Err(Error::InvalidConfig {
+                field: "schedule",
+                why: format!("`{s}` is not paper, pyramid or pyramid-stride2"),
+            }),
+        }
+    }
+}
+
+/// How the photometric and depth residuals of a pixel are weighted (section 3 of the
+/// paper, after Kerl et al.).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Weighting {
+    /// One scalar scale σ² over `r_I² + (λ r_Z)²`: the depth gain λ sets the relative
+    /// trust of the two residuals once and for all (ecvo's first reading of the paper).
+    Scalar,
+    /// Kerl et al.'s bivariate t-distribution: a 2x2 scale matrix Σ over `(r_I, r_Z)`
+    /// estimated by fixed-point iteration every iteration, so each residual is
+    /// measured against its own spread and their correlation. λ cancels out here:
+    /// scaling `r_Z` scales Σ's depth row and column with it.
+    Bivariate,
+}
+
+/// How the noise of a depth residual depends on depth.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthNoiseModel {
+    /// The same for every pixel.
+    Constant,
+    /// Standard deviation growing with z² (structured-light and time-of-flight
+    /// sensors): the depth residual of a point at depth z is divided by z² (z in
+    /// metres, at least 0.3), so the scale describes the noise at 1 m.
+    Quadratic,
+}
+
+/// What to start [A], the frame-to-frame `MOTION`, from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MotionPrior {
+    /// The identity, as the paper does.
+    Identity,
+    /// Constant velocity: the previous frame's [A] scaled by the ratio of the frame
+    /// intervals. The identity is tried too at the coarsest step and the better start
+    /// is kept, so that a sudden stop costs nothing.
+    ConstantVelocity,
 }
 
 /// Settings of `MOTION(Fi, Fj, Tinit)`.
@@ -167,6 +237,20 @@ pub struct MotionConfig {
     pub max_translation_m: f64,
     /// A result rotating more than this between the two frames (degrees) failed.
     pub max_rotation_deg: f64,
+    /// How residuals are weighted.
+    pub weighting: Weighting,
+    /// How the depth residual's noise grows with depth.
+    pub depth_noise: DepthNoiseModel,
+    /// What [A] starts from.
+    pub prior: MotionPrior,
+    /// A result whose photometric residuals spread more than this (the robust scale
+    /// `√Σ_II`, intensity in [0, 1]) failed: the two frames do not show the same
+    /// scene at that alignment (a good registration is near 0.01, an alignment of
+    /// unrelated images near 0.25). `f64::INFINITY` switches the check off.
+    pub max_intensity_sigma: f64,
+    /// The same for the depth residuals: `√Σ_ZZ / λ` in metres (at 1 m with the
+    /// quadratic noise model).
+    pub max_depth_sigma_m: f64,
 }
 
 /// Everything the tracker needs to know.
@@ -183,6 +267,19 @@ pub struct Config {
     /// After this many consecutive lost frames the tracker re-anchors on the next
     /// frame at the last good pose instead of insisting on the old frames.
     pub max_lost_frames: u32,
+    /// A correction ([B], [C], ...) whose result moved further than this from its
+    /// initial guess is rejected: the mean change it makes to the whitened residuals,
+    /// `δᵀ H δ / n` for the twist δ between guess and result and the information
+    /// matrix H (whitened by the estimated scale) over n residuals. A correction
+    /// removes drift, which is small against the sensor noise; a large move means it
+    /// converged somewhere else. `f64::INFINITY` accepts every correction.
+    pub max_correction_distance: f64,
+    /// A frame becomes an anchor after a loss only with at least this fraction of
+    /// its pixels carrying depth after filtering.
+    pub min_anchor_depth_fraction: f64,
+    /// ... and at least this fraction carrying intensity texture (gradient above
+    /// [`crate::prepare::TEXTURE_GRADIENT`]) where there is depth.
+    pub min_anchor_texture_fraction: f64,
 }
 
 impl Config {
@@ -223,17 +320,39 @@ impl Config {
             motion: MotionConfig {
                 depth_gain: 1.8,
                 t_dof: 5.0,
-                // Measured on fr1/xyz (half resolution and full300): the paper's sampling is both
-                // faster and at least as accurate as a pyramid; see the README.
-                levels: Schedule::PaperSampling.levels(),
+                levels: Schedule::PyramidStride2.levels(),
                 min_update: 1e-6,
                 min_valid_pixels: 200,
                 max_translation_m: 0.5,
                 max_rotation_deg: 45.0,
+                weighting: Weighting::Bivariate,
+                depth_noise: DepthNoiseModel::Quadratic,
+                prior: MotionPrior::ConstantVelocity,
+                max_intensity_sigma: 0.1,
+                max_depth_sigma_m: 0.05,
             },
             reference_levels: levels[..used].to_vec(),
             max_lost_frames: 10,
+            max_correction_distance: 4.0,
+            min_anchor_depth_fraction: 0.2,
+            min_anchor_texture_fraction: 0.02,
         }
+    }
+
+    /// The paper's method as written, to reproduce its Table 1: the 8/4/2 sampling of
+    /// the full-resolution image, one scalar scale with λ, [A] from the identity and
+    /// every converged correction accepted. (A failed correction never makes the
+    /// frame a reference, in either configuration.)
+    pub fn paper(camera: Camera, preset: Preset, mode: Mode) -> Self {
+        let mut c = Config::new(camera, preset, mode);
+        c.motion.levels = Schedule::PaperSampling.levels();
+        c.motion.weighting = Weighting::Scalar;
+        c.motion.depth_noise = DepthNoiseModel::Constant;
+        c.motion.prior = MotionPrior::Identity;
+        c.max_correction_distance = f64::INFINITY;
+        c.motion.max_intensity_sigma = f64::INFINITY;
+        c.motion.max_depth_sigma_m = f64::INFINITY;
+        c
     }
 
     /// Checks every field; the error names the first bad one.
@@ -328,11 +447,34 @@ impl Config {
                 format!("{} is not positive", m.min_update),
             );
         }
+        if !(m.max_intensity_sigma > 0.0 && m.max_depth_sigma_m > 0.0) {
+            return bad(
+                "motion.max_intensity_sigma/max_depth_sigma_m",
+                "must be positive".into(),
+            );
+        }
         if !(m.max_translation_m > 0.0 && m.max_rotation_deg > 0.0) {
             return bad(
                 "motion.max_translation_m/max_rotation_deg",
                 "must be positive".into(),
             );
+        }
+        if !(self.max_correction_distance > 0.0) {
+            return bad(
+                "max_correction_distance",
+                format!("{} is not positive", self.max_correction_distance),
+            );
+        }
+        for (field, v) in [
+            ("min_anchor_depth_fraction", self.min_anchor_depth_fraction),
+            (
+                "min_anchor_texture_fraction",
+                self.min_anchor_texture_fraction,
+            ),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return bad(field, format!("{v} is not a fraction in [0, 1]"));
+            }
         }
         for l in &self.reference_levels {
             if !(l.max_distance_m >= 0.0 && l.max_distance_m.is_finite()) {

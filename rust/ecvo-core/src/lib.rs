@@ -19,12 +19,14 @@ pub mod config;
 pub mod error;
 pub mod motion;
 pub mod prepare;
+pub mod scale;
 pub mod se3;
 pub mod tracker;
 
 pub use camera::{Camera, FrameView};
 pub use config::{
-    Config, FilterConfig, Mode, MotionConfig, MotionLevel, Preset, ReferenceLevel, Schedule,
+    Config, DepthNoiseModel, FilterConfig, Mode, MotionConfig, MotionLevel, MotionPrior, Preset,
+    ReferenceLevel, Schedule, Weighting,
 };
 pub use error::{Error, Result};
 pub use motion::{MotionEstimator, MotionResult};

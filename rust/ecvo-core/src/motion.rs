@@ -7,18 +7,23 @@
 //! - the photometric residual is `r_I = I_i(u') − I_j(q)` (intensities in [0, 1]),
 //! - the geometric residual is `r_Z = D_i(u') − [T q]_z` (metres), scaled by λ,
 //!
-//! and both share one weight from a bivariate t-distribution (ν = 5) on
-//! `e² = r_I² + λ² r_Z²`, whose scale is re-estimated every iteration. Gauss-Newton
-//! on a left perturbation `T ← exp(δ) T` runs coarse to fine; a step that raises the
-//! error is rejected and ends its level. The result reports `T_{i,j} = T⁻¹`, the
+//! and both share one weight from a bivariate t-distribution (ν = 5) whose 2x2 scale
+//! matrix over `(r_I, r_Z)` is re-fitted after every accepted update (see
+//! [`crate::scale`]; [`Weighting::Scalar`] is the special case of one σ² over
+//! `(r_I, λ r_Z)`). With [`DepthNoiseModel::Quadratic`] the depth residual is divided
+//! by z², so the scale describes the depth noise at 1 m and far points count less.
+//! Gauss-Newton on a left perturbation `T ← exp(δ) T` runs coarse to fine on the image
+//! pyramid; an update that raises the robust cost at its scale, or leaves too few
+//! residuals, is undone and ends its step. The result reports `T_{i,j} = T⁻¹`, the
 //! motion that maps camera `i` coordinates into camera `j` coordinates.
 
 use nalgebra::{Matrix6, SymmetricEigen, Vector6};
 use rayon::prelude::*;
 
 use crate::Pose;
-use crate::config::MotionConfig;
-use crate::prepare::{PreparedFrame, Sample};
+use crate::config::{DepthNoiseModel, MotionConfig, MotionLevel, Weighting};
+use crate::prepare::{ImageLevel, PreparedFrame, Sample};
+use crate::scale::{self, PassSums, Scale, Whitener};
 use crate::se3;
 
 /// The most coarse-to-fine steps a schedule may have.
@@ -35,6 +40,10 @@ pub enum Failure {
     NotFinite,
     /// The estimated motion is larger than a frame-to-frame motion can be.
     TooLarge,
+    /// The residuals at the result spread too widely
+    /// ([`MotionConfig::max_intensity_sigma`], [`MotionConfig::max_depth_sigma_m`]):
+    /// the frames do not show the same scene at that alignment.
+    Inconsistent,
 }
 
 /// How the estimation ended.
@@ -62,8 +71,13 @@ pub struct MotionResult {
     pub error: f64,
     /// Valid residuals at the finest step.
     pub valid_pixels: usize,
-    /// `JᵀWJ` at the finest step: the information matrix of the twist `[v; ω]`.
+    /// `JᵀWJ` at the finest step, whitened by the estimated scale: the information
+    /// matrix of the twist `[v; ω]` of the left perturbation of `T_{j→i}`.
     pub information: Matrix6<f64>,
+    /// The residuals' scale at the finest step.
+    pub scale: Option<Scale>,
+    /// Which initial guess won at the coarsest step (0: the first).
+    pub start: u8,
     /// Converged, ran out of iterations, or failed.
     pub status: Status,
 }
@@ -196,13 +210,13 @@ impl Accumulator {
 
 /// One warped template point: its residuals and what its Jacobian needs.
 #[derive(Clone, Copy, Debug, Default)]
-struct Residual {
+pub(crate) struct Residual {
     /// Photometric residual.
     ri: f32,
-    /// Depth residual, NaN when the current depth is missing there.
+    /// Depth residual times its gain `sz`, NaN when the current depth is missing there.
     rz: f32,
-    /// `e² = r_I² + λ² r_Z²`.
-    e2: f32,
+    /// The depth residual's gain: λ, or λ / z² with the quadratic noise model.
+    sz: f32,
     /// Intensity gradient at `u'` (per pixel).
     gx: f32,
     gy: f32,
@@ -211,6 +225,17 @@ struct Residual {
     dy: f32,
     /// The warped point `T q` in current-camera coordinates.
     p: [f32; 3],
+}
+
+impl scale::Pair for Residual {
+    #[inline(always)]
+    fn ri(&self) -> f32 {
+        self.ri
+    }
+    #[inline(always)]
+    fn rz(&self) -> f32 {
+        self.rz
+    }
 }
 
 /// Smallest number of residuals a coarse step needs to be worth solving.
@@ -228,23 +253,67 @@ pub const CHUNK: usize = 4096;
 /// middle one (19k) into two; at 320x240 only the finest step (19k) splits, in two.
 pub const MIN_CHUNKS_PER_TASK: usize = 2;
 
+/// Most fixed-point passes of one scale fit.
+const MAX_SCALE_PASSES: usize = 20;
+
+/// The settings of one `MOTION` call, in the form the per-pixel loops use.
+#[derive(Clone, Copy, Debug)]
+struct Params {
+    nu: f32,
+    /// λ.
+    lambda: f32,
+    weighting: Weighting,
+    quadratic_noise: bool,
+}
+
+impl Params {
+    fn of(cfg: &MotionConfig) -> Params {
+        Params {
+            nu: cfg.t_dof as f32,
+            lambda: cfg.depth_gain as f32,
+            weighting: cfg.weighting,
+            quadratic_noise: cfg.depth_noise == DepthNoiseModel::Quadratic,
+        }
+    }
+}
+
+/// What one coarse-to-fine step left.
+#[derive(Clone, Copy, Debug)]
+struct StepOutcome {
+    /// `T_{j→i}` at the end of the step.
+    t: Pose,
+    /// The normal equations of the last linearisation (None: the step never had
+    /// enough residuals).
+    ne: Option<NormalEquations>,
+    /// Gauss-Newton iterations run (steps solved).
+    iterations: u32,
+    /// True when the step used all its iterations, each one accepted.
+    hit_max: bool,
+    /// The scale at the end of the step.
+    scale: Option<Scale>,
+    /// Mean robust cost at `t` for `scale`.
+    cost: f64,
+    /// Residuals at `t`.
+    valid: usize,
+}
+
 /// Runs `MOTION` and keeps its scratch buffers between calls, so that a warm
 /// estimator does not allocate.
 ///
-/// The per-point work (warping, t-scale passes, weighted error, normal equations)
-/// runs over fixed chunks of [`CHUNK`] template points, with rayon (in whatever pool
-/// the caller is in) once a template is large enough. The per-chunk partial sums
-/// are added in chunk order.
+/// The per-point work (warping, scale passes, robust cost, normal equations) runs
+/// over fixed chunks of [`CHUNK`] template points, with rayon (in whatever pool the
+/// caller is in) once a template is large enough. The per-chunk partial sums are
+/// added in chunk order.
 #[derive(Debug, Default)]
 pub struct MotionEstimator {
     /// Residuals of each chunk of template points.
     chunks: Vec<Vec<Residual>>,
     /// Per-chunk normal equations, merged in order.
     partial: Vec<NormalEquations>,
-    /// Per-chunk weighted errors, added in order.
+    /// Per-chunk robust costs, added in order.
     errors: Vec<f64>,
-    /// Per-chunk sums of a t-scale pass, added in order.
-    sums: Vec<f64>,
+    /// Per-chunk sums of a scale pass, added in order.
+    sums: Vec<PassSums>,
     /// Chunks the last warp filled.
     used: usize,
 }
@@ -291,83 +360,74 @@ impl MotionEstimator {
         t_init: &Pose,
         cfg: &MotionConfig,
     ) -> MotionResult {
+        self.motion_from(fi, fj, std::slice::from_ref(t_init), cfg)
+    }
+
+    /// `MOTION` from the best of several initial guesses: the coarsest step runs from
+    /// each, and the one whose result explains the template best (the lowest mean
+    /// robust cost at a common scale, a template point that leaves the image costing
+    /// as much as the worst outlier) goes on to the finer steps. Ties go to the
+    /// earlier guess. [`MotionResult::start`] says which one won.
+    pub fn motion_from(
+        &mut self,
+        fi: &PreparedFrame,
+        fj: &PreparedFrame,
+        inits: &[Pose],
+        cfg: &MotionConfig,
+    ) -> MotionResult {
+        let first = inits.first().copied().unwrap_or_else(Pose::identity);
         let mut result = MotionResult {
-            pose: *t_init,
+            pose: first,
             iterations: [0; MAX_STEPS],
             steps: cfg.levels.len().min(MAX_STEPS),
             error: f64::NAN,
             valid_pixels: 0,
             information: Matrix6::zeros(),
+            scale: None,
+            start: 0,
             status: Status::Failed(Failure::TooFewPixels),
         };
-        if !se3::is_finite(t_init) {
+        if inits.is_empty() || !inits.iter().all(se3::is_finite) {
             result.status = Status::Failed(Failure::NotFinite);
             return result;
         }
-        let lambda2 = (cfg.depth_gain * cfg.depth_gain) as f32;
-        let nu = cfg.t_dof as f32;
-        // T_{j→i}: moves reference points into the current camera.
-        let mut t = t_init.inverse();
-        let mut finest: Option<NormalEquations> = None;
-        let mut finest_hit_max = false;
+        let p = Params::of(cfg);
+        let mut last_step: Option<StepOutcome> = None;
+        let mut scale: Option<Scale> = None;
+        let mut t = first.inverse();
         for (k, step) in cfg.levels.iter().enumerate().take(MAX_STEPS) {
             let (Some(level), Some(template)) =
                 (fi.levels.get(step.pyramid_level), fj.templates.get(k))
             else {
                 break;
             };
-            let last = k + 1 == result.steps;
-            let mut accepted: Option<NormalEquations> = None;
-            let mut prev_t = t;
-            let mut hit_max = true;
-            let mut sigma2 = None;
-            for it in 0..step.max_iterations {
-                let n = self.residuals_at(&t, &template.points, level, lambda2);
-                if n < MIN_STEP_RESIDUALS {
-                    hit_max = false;
-                    break;
-                }
-                let s2 = t_scale(&self.chunks[..self.used], &mut self.sums, nu, sigma2);
-                sigma2 = Some(s2);
-                // The error first: a step that made things worse needs no Jacobians.
-                let error = self.weighted_error(s2, nu);
-                let err = error / n as f64;
-                if accepted.is_some_and(|a| err > a.error / a.count as f64) {
-                    // The last step made things worse: undo it and end this level.
-                    t = prev_t;
-                    hit_max = false;
-                    break;
-                }
-                let ne = self.normal_equations(level, s2, nu, lambda2, error);
-                result.iterations[k] = it + 1;
-                accepted = Some(ne);
-                let Some(delta) = ne.solve() else {
-                    hit_max = false;
-                    break;
-                };
-                prev_t = t;
-                t = se3::compose(&se3::exp(&delta), &t);
-                let small = delta.fixed_rows::<3>(0).norm() < cfg.min_update
-                    && delta.fixed_rows::<3>(3).norm() < cfg.min_update;
-                if small {
-                    hit_max = false;
-                    break;
-                }
+            let out = if k == 0 && inits.len() > 1 {
+                let (best, out) = self.best_start(level, &template.points, inits, step, cfg, &p);
+                result.start = best as u8;
+                out
+            } else {
+                self.run_step(level, &template.points, t, step, cfg, &p, scale)
+            };
+            result.iterations[k] = out.iterations;
+            t = out.t;
+            if out.scale.is_some() {
+                scale = out.scale;
             }
-            if last {
-                finest = accepted;
-                finest_hit_max = hit_max;
-            }
+            last_step = Some(out);
         }
 
-        let Some(ne) = finest else {
+        let Some(last) = last_step else {
             return result;
         };
-        result.error = ne.error / ne.count as f64;
-        result.valid_pixels = ne.count;
+        let Some(ne) = last.ne else {
+            return result;
+        };
+        result.error = last.cost;
+        result.valid_pixels = last.valid;
         result.information = ne.hessian();
+        result.scale = last.scale;
         let pose = t.inverse();
-        result.status = if ne.count < cfg.min_valid_pixels {
+        result.status = if last.valid < cfg.min_valid_pixels {
             Status::Failed(Failure::TooFewPixels)
         } else if !se3::is_finite(&pose) {
             Status::Failed(Failure::NotFinite)
@@ -377,7 +437,12 @@ impl MotionEstimator {
             || se3::angle(&pose).to_degrees() > cfg.max_rotation_deg
         {
             Status::Failed(Failure::TooLarge)
-        } else if finest_hit_max {
+        } else if last.scale.is_some_and(|s| {
+            s.ii.sqrt() > cfg.max_intensity_sigma
+                || s.zz.sqrt() > cfg.max_depth_sigma_m * cfg.depth_gain.max(1e-9)
+        }) {
+            Status::Failed(Failure::Inconsistent)
+        } else if last.hit_max {
             Status::MaxIterations
         } else {
             Status::Converged
@@ -388,14 +453,131 @@ impl MotionEstimator {
         result
     }
 
+    /// Runs the first step from every guess and keeps the best (see
+    /// [`Self::motion_from`]); returns its index and outcome.
+    fn best_start(
+        &mut self,
+        level: &ImageLevel,
+        points: &[[f32; 4]],
+        inits: &[Pose],
+        step: &MotionLevel,
+        cfg: &MotionConfig,
+        p: &Params,
+    ) -> (usize, StepOutcome) {
+        let outs: Vec<StepOutcome> = inits
+            .iter()
+            .map(|init| self.run_step(level, points, init.inverse(), step, cfg, p, None))
+            .collect();
+        // A common scale: the first guess's (the identity's, for [A]).
+        let Some(common) = outs.iter().find_map(|o| o.scale) else {
+            return (0, outs[0]);
+        };
+        let wh = common.whitener(p.nu);
+        let total = points.len().max(1) as f64;
+        let mut best = (0, f64::INFINITY);
+        for (k, o) in outs.iter().enumerate() {
+            if o.ne.is_none() {
+                continue;
+            }
+            self.residuals_at(&o.t, points, level, p);
+            let cost = self.cost(&wh);
+            let missing = (points.len() - self.valid()) as f64 * wh.max_cost() as f64;
+            let c = (cost + missing) / total;
+            if c < best.1 {
+                best = (k, c);
+            }
+        }
+        (best.0, outs[best.0])
+    }
+
+    /// One coarse-to-fine step: Gauss-Newton from `t` with the scale re-fitted after
+    /// every accepted update. A update is accepted only if it lowers the mean robust
+    /// cost at the scale it was computed with (the IRLS majoriser, so the robust
+    /// objective itself does not rise) and leaves enough residuals; otherwise it is
+    /// undone and the step ends.
+    fn run_step(
+        &mut self,
+        level: &ImageLevel,
+        points: &[[f32; 4]],
+        mut t: Pose,
+        step: &MotionLevel,
+        cfg: &MotionConfig,
+        p: &Params,
+        start: Option<Scale>,
+    ) -> StepOutcome {
+        let mut out = StepOutcome {
+            t,
+            ne: None,
+            iterations: 0,
+            hit_max: false,
+            scale: start,
+            cost: f64::NAN,
+            valid: 0,
+        };
+        let mut n = self.residuals_at(&t, points, level, p);
+        if n < MIN_STEP_RESIDUALS {
+            return out;
+        }
+        let Some(mut scale) = self.fit_scale(p, start) else {
+            return out;
+        };
+        let mut wh = scale.whitener(p.nu);
+        let mut cost = self.cost(&wh) / n as f64;
+        out.hit_max = true;
+        for it in 0..step.max_iterations {
+            let ne = self.normal_equations(level, &wh, p, cost * n as f64);
+            out.ne = Some(ne);
+            out.iterations = it + 1;
+            let Some(delta) = ne.solve() else {
+                out.hit_max = false;
+                break;
+            };
+            let candidate = se3::compose(&se3::exp(&delta), &t);
+            let m = self.residuals_at(&candidate, points, level, p);
+            if m < MIN_STEP_RESIDUALS {
+                out.hit_max = false;
+                break;
+            }
+            let c = self.cost(&wh) / m as f64;
+            // `!(c <= cost)` also rejects NaN.
+            if !(c <= cost) {
+                out.hit_max = false;
+                break;
+            }
+            t = candidate;
+            n = m;
+            if let Some(s) = self.fit_scale(p, Some(scale)) {
+                scale = s;
+                wh = scale.whitener(p.nu);
+            }
+            cost = self.cost(&wh) / n as f64;
+            let small = delta.fixed_rows::<3>(0).norm() < cfg.min_update
+                && delta.fixed_rows::<3>(3).norm() < cfg.min_update;
+            if small {
+                out.hit_max = false;
+                break;
+            }
+        }
+        out.t = t;
+        out.scale = Some(scale);
+        out.cost = cost;
+        out.valid = n;
+        out
+    }
+
+    /// Residuals stored by the last warp.
+    fn valid(&self) -> usize {
+        self.chunks[..self.used].iter().map(Vec::len).sum()
+    }
+
     /// Warps the template into `level` under `t` and stores the residuals; returns
     /// how many template points produced a photometric residual.
     fn residuals_at(
         &mut self,
         t: &Pose,
         points: &[[f32; 4]],
-        level: &crate::prepare::ImageLevel,
-        lambda2: f32,
+        level: &ImageLevel,
+        p: &Params,
     ) -> usize {
         let cam = level.camera();
         assert_eq!(
@@ -410,7 +592,8 @@ impl MotionEstimator {
             w: cam.width,
             max: [(cam.width - 1) as f32, (cam.height - 1) as f32],
             samples: &level.samples,
-            lambda2,
+            lambda: p.lambda,
+            quadratic: p.quadratic_noise,
         };
         let n = points.len().div_ceil(CHUNK);
         self.reserve(n);
@@ -427,17 +610,54 @@ impl MotionEstimator {
                 .with_min_len(MIN_CHUNKS_PER_TASK)
                 .for_each(|(pts, buf)| warp.run(pts, buf));
         }
-        self.chunks[..n].iter().map(Vec::len).sum()
+        self.valid()
     }
 
-    /// `Σ w e²` over the stored residuals for the scale `sigma2` (pixel order within a
+    /// Fits the scale to the stored residuals by fixed-point iteration from `start`
+    /// (or from their plain second moments); `None` when there is no residual.
+    fn fit_scale(&mut self, p: &Params, start: Option<Scale>) -> Option<Scale> {
+        let chunks = &self.chunks[..self.used];
+        let (mut two, mut one) = (0, 0);
+        for c in chunks {
+            let (t, o) = scale::count(c);
+            two += t;
+            one += o;
+        }
+        let mut s = match start {
+            Some(s) if s.ii > 0.0 && s.zz > 0.0 && s.ii.is_finite() && s.zz.is_finite() => s,
+            _ => scale::initial_scale(chunks, p.weighting)?,
+        };
+        for _ in 0..MAX_SCALE_PASSES {
+            let wh = s.whitener(p.nu);
+            let weighting = p.weighting;
+            map_chunks(chunks, &mut self.sums, |c| scale::pass(c, &wh, weighting));
+            let mut total = [0.0f64; 4];
+            for part in &self.sums {
+                for k in 0..4 {
+                    total[k] += part[k];
+                }
+            }
+            let next = scale::next_scale(&total, two, one, p.weighting)?;
+            let done = scale::settled(&s, &next);
+            s = next;
+            if done {
+                break;
+            }
+        }
+        Some(s)
+    }
+
+    /// `Σ w d²` over the stored residuals at a fixed scale (pixel order within a
     /// chunk, chunk order across them).
-    fn weighted_error(&mut self, sigma2: f32, nu: f32) -> f64 {
-        let inv_s2 = 1.0 / sigma2;
+    fn cost(&mut self, wh: &Whitener) -> f64 {
         let sum = |res: &Vec<Residual>| {
             let mut e = 0.0f64;
-            for r in res {
-                e += (t_weight(r, nu, inv_s2) * r.e2) as f64;
+            for run in res.chunks(256) {
+                let mut part = 0.0f32;
+                for r in run {
+                    part += wh.cost(r.ri, r.rz);
+                }
+                e += part as f64;
             }
             e
         };
@@ -449,27 +669,35 @@ impl MotionEstimator {
         total
     }
 
-    /// Weights the stored residuals and accumulates the normal equations; `error` is
-    /// their [`Self::weighted_error`], computed first.
+    /// Weights and whitens the stored residuals and accumulates the normal equations;
+    /// `error` is their [`Self::cost`], computed first.
     fn normal_equations(
         &mut self,
-        level: &crate::prepare::ImageLevel,
-        sigma2: f32,
-        nu: f32,
-        lambda2: f32,
+        level: &ImageLevel,
+        wh: &Whitener,
+        p: &Params,
         error: f64,
     ) -> NormalEquations {
         let cam = level.camera();
         let (fx, fy) = (cam.fx as f32, cam.fy as f32);
-        let inv_s2 = 1.0 / sigma2;
+        let _ = p;
         let accumulate = |res: &Vec<Residual>| {
             let mut acc = Accumulator::new();
             for r in res {
-                let w = t_weight(r, nu, inv_s2);
+                let (_, w) = wh.weigh(r.ri, r.rz);
                 let (ji, jz) = jacobians(r, fx, fy);
-                acc.add(&ji, r.ri, w);
-                if let Some(jz) = jz {
-                    acc.add(&jz, r.rz, w * lambda2);
+                match jz {
+                    Some(jz) => {
+                        // L r and L J with Σ⁻¹ = Lᵀ L: two whitened rows.
+                        let a: JRow = std::array::from_fn(|b| wh.l11 * ji[b] + wh.l12 * jz[b]);
+                        acc.add(&a, wh.l11 * r.ri + wh.l12 * r.rz, w);
+                        let c: JRow = std::array::from_fn(|b| wh.l22 * jz[b]);
+                        acc.add(&c, wh.l22 * r.rz, w);
+                    }
+                    None => {
+                        let a: JRow = std::array::from_fn(|b| wh.l1d * ji[b]);
+                        acc.add(&a, wh.l1d * r.ri, w);
+                    }
                 }
                 acc.end_pixel();
             }
@@ -477,20 +705,12 @@ impl MotionEstimator {
         };
         map_chunks(&self.chunks[..self.used], &mut self.partial, accumulate);
         let mut total = NormalEquations::default();
-        for p in &self.partial {
-            total.merge(p);
+        for part in &self.partial {
+            total.merge(part);
         }
         total.error = error;
         total
     }
-}
-
-/// The t-distribution weight of a residual for the scale `1 / inv_s2` (Kerl et al.):
-/// `(ν + d) / (ν + e² / σ²)`, with `d` its dimension (2 with depth, 1 without).
-#[inline(always)]
-fn t_weight(r: &Residual, nu: f32, inv_s2: f32) -> f32 {
-    let dims = if r.rz.is_finite() { 2.0 } else { 1.0 };
-    (nu + dims) / (nu + r.e2 * inv_s2)
 }
 
 /// True when a loop over `chunks` chunks is worth handing to rayon: each of at least
@@ -529,7 +749,8 @@ struct Warp<'a> {
     /// Largest u and v a bilinear lookup may start from (exclusive).
     max: [f32; 2],
     samples: &'a [Sample],
-    lambda2: f32,
+    lambda: f32,
+    quadratic: bool,
 }
 
 impl Warp<'_> {
@@ -538,7 +759,6 @@ impl Warp<'_> {
         let r = &self.r;
         let [fx, fy, cx, cy] = self.f;
         let [umax, vmax] = self.max;
-        let lambda2 = self.lambda2;
         out.clear();
         for q in points {
             let x = r[0][0] * q[0] + r[0][1] * q[1] + r[0][2] * q[2] + r[0][3];
@@ -558,16 +778,17 @@ impl Warp<'_> {
             let ri = s[0] - q[3];
             let rz = s[3] - z;
             let depth_ok = rz.is_finite() && s[4].is_finite() && s[5].is_finite();
-            let rz = if depth_ok { rz } else { f32::NAN };
-            let e2 = if depth_ok {
-                ri * ri + lambda2 * rz * rz
+            // The depth residual's gain: λ, over z² for the quadratic noise model.
+            let sz = if self.quadratic {
+                let ze = z.max(0.3);
+                self.lambda / (ze * ze)
             } else {
-                ri * ri
+                self.lambda
             };
             out.push(Residual {
                 ri,
-                rz,
-                e2,
+                rz: if depth_ok { sz * rz } else { f32::NAN },
+                sz,
                 gx: s[1],
                 gy: s[2],
                 dx: s[4],
@@ -578,9 +799,10 @@ impl Warp<'_> {
     }
 }
 
-/// The Jacobians of the photometric and (when present) depth residuals of one
-/// warped point with respect to a left perturbation `exp(δ) T`:
-/// `J_I = ∇I · ∂π/∂p · [I | −[p]×]` and `J_Z = (∇D · ∂π/∂p − e_z) · [I | −[p]×]`.
+/// The Jacobians of the photometric and (when present) scaled depth residuals of
+/// one warped point with respect to a left perturbation `exp(δ) T`:
+/// `J_I = ∇I · ∂π/∂p · [I | −[p]×]` and `J_Z = s (∇D · ∂π/∂p − e_z) · [I | −[p]×]`,
+/// with `s` the depth residual's gain (held fixed, as IRLS holds a weight fixed).
 #[inline(always)]
 fn jacobians(r: &Residual, fx: f32, fy: f32) -> (JRow, Option<JRow>) {
     let [x, y, z] = r.p;
@@ -591,10 +813,11 @@ fn jacobians(r: &Residual, fx: f32, fy: f32) -> (JRow, Option<JRow>) {
         -(r.gx * fx * x + r.gy * fy * y) * iz * iz,
     ];
     let jz = r.rz.is_finite().then(|| {
+        let s = r.sz;
         let b = [
-            r.dx * fx * iz,
-            r.dy * fy * iz,
-            -(r.dx * fx * x + r.dy * fy * y) * iz * iz - 1.0,
+            s * r.dx * fx * iz,
+            s * r.dy * fy * iz,
+            s * (-(r.dx * fx * x + r.dy * fy * y) * iz * iz - 1.0),
         ];
         twist_row(b, r.p)
     });
@@ -631,55 +854,6 @@ fn bilinear(s: &[Sample], w: usize, u: f32, v: f32) -> Sample {
         ax * ay,
     );
     std::array::from_fn(|c| w00 * p00[c] + w01 * p01[c] + w10 * p10[c] + w11 * p11[c])
-}
-
-/// The scale σ² of a bivariate t-distribution with `nu` degrees of freedom fitted
-/// to the residuals (in chunks, see [`CHUNK`]) by fixed-point iteration (Kerl et
-/// al.), started from `start` (the previous iteration's scale) when given; pixels
-/// with only a photometric residual count as one dimension. A pass sums each chunk
-/// (in f32 over short runs, then in f64), with rayon when there are enough chunks,
-/// and adds the chunks in order; `sums` is scratch.
-fn t_scale(chunks: &[Vec<Residual>], sums: &mut Vec<f64>, nu: f32, start: Option<f32>) -> f32 {
-    let dims: usize = chunks
-        .iter()
-        .flatten()
-        .map(|r| if r.rz.is_finite() { 2 } else { 1 })
-        .sum();
-    if dims == 0 {
-        return 1.0;
-    }
-    let dims = dims as f64;
-    let mut s2 = match start {
-        Some(s) if s > 0.0 && s.is_finite() => s as f64,
-        _ => (chunks.iter().flatten().map(|r| r.e2 as f64).sum::<f64>() / dims).max(1e-12),
-    };
-    for _ in 0..20 {
-        let inv = (1.0 / s2) as f32;
-        let pass = |c: &Vec<Residual>| {
-            let mut acc = 0.0f64;
-            for run in c.chunks(256) {
-                let mut part = 0.0f32;
-                for r in run {
-                    let d = if r.rz.is_finite() { 2.0 } else { 1.0 };
-                    part += r.e2 * (nu + d) / (nu + r.e2 * inv);
-                }
-                acc += part as f64;
-            }
-            acc
-        };
-        map_chunks(chunks, sums, pass);
-        let mut acc = 0.0f64;
-        for p in sums.iter() {
-            acc += p;
-        }
-        let next = (acc / dims).max(1e-12);
-        let done = (next - s2).abs() < 1e-3 * s2;
-        s2 = next;
-        if done {
-            break;
-        }
-    }
-    s2 as f32
 }
 
 /// True when the Jacobi-scaled information matrix is nearly singular: some motion
@@ -760,7 +934,13 @@ mod tests {
                 .collect();
             let t = se3::exp(&Vector6::new(0.02, -0.01, 0.03, 0.01, -0.02, 0.015));
             let mut est = MotionEstimator::new();
-            let n = est.residuals_at(&t, &points, &level, 3.24);
+            let params = Params {
+                nu: 5.0,
+                lambda: 1.0,
+                weighting: Weighting::Bivariate,
+                quadratic_noise: false,
+            };
+            let n = est.residuals_at(&t, &points, &level, &params);
             assert_eq!(n, points.len());
             let base: Vec<Residual> = est.residuals().copied().collect();
             let h = 1e-4;
@@ -768,11 +948,11 @@ mod tests {
                 let mut d = Vector6::zeros();
                 d[k] = h;
                 let plus = {
-                    est.residuals_at(&(se3::exp(&d) * t), &points, &level, 3.24);
+                    est.residuals_at(&(se3::exp(&d) * t), &points, &level, &params);
                     est.residuals().copied().collect::<Vec<_>>()
                 };
                 let minus = {
-                    est.residuals_at(&(se3::exp(&-d) * t), &points, &level, 3.24);
+                    est.residuals_at(&(se3::exp(&-d) * t), &points, &level, &params);
                     est.residuals().copied().collect::<Vec<_>>()
                 };
                 for (i, r) in base.iter().enumerate() {
@@ -793,29 +973,6 @@ mod tests {
                 }
             }
         }
-    }
-
-    #[test]
-    fn t_scale_fits_a_known_spread() {
-        // Residuals drawn from ±s with no outliers: the t-scale sits near s².
-        let s = 0.05f32;
-        let res: Vec<Residual> = (0..1000)
-            .map(|i| {
-                let ri = if i % 2 == 0 { s } else { -s };
-                Residual {
-                    ri,
-                    rz: f32::NAN,
-                    e2: ri * ri,
-                    ..Residual::default()
-                }
-            })
-            .collect();
-        let mut sums = Vec::new();
-        let s2 = t_scale(std::slice::from_ref(&res), &mut sums, 5.0, None);
-        assert!((s2 / (s * s) - 1.0).abs() < 0.05, "sigma² {s2}");
-        assert_eq!(t_scale(&[], &mut sums, 5.0, None), 1.0);
-        let warm = t_scale(std::slice::from_ref(&res), &mut sums, 5.0, Some(0.01));
-        assert!((warm / s2 - 1.0).abs() < 0.01, "warm start {warm} vs {s2}");
     }
 
     #[test]

@@ -52,6 +52,10 @@ pub const I: usize = 0;
 /// Index of the depth channel in a [`Sample`].
 pub const D: usize = 3;
 
+/// The intensity gradient (`|Ix| + |Iy|`, intensity in [0, 1] per pixel: 2.5 gray
+/// levels a pixel) above which a pixel counts as textured.
+pub const TEXTURE_GRADIENT: f32 = 0.01;
+
 /// One level of the image pyramid, interleaved so that a bilinear lookup of all
 /// six channels touches four contiguous 32-byte pixels.
 #[derive(Clone, Debug, Default)]
@@ -93,6 +97,10 @@ pub struct PreparedFrame {
     pub normals: Vec<[f32; 3]>,
     /// Number of full-resolution pixels with depth after filtering.
     pub valid_depth: usize,
+    /// Number of full-resolution pixels with depth whose intensity gradient
+    /// (`|Ix| + |Iy|`, intensity in [0, 1] per pixel) is at least [`TEXTURE_GRADIENT`]:
+    /// how much there is for the photometric residual to hold on to.
+    pub textured_pixels: usize,
     /// Pixels the normal filter removed.
     pub removed_by_normal: usize,
     /// Pixels the contour filter removed.
@@ -271,6 +279,11 @@ impl Preparer {
         for level in &mut out.levels {
             gradients(level);
         }
+        out.textured_pixels = out.levels[0]
+            .samples
+            .iter()
+            .filter(|s| s[D].is_finite() && s[1].abs() + s[2].abs() >= TEXTURE_GRADIENT)
+            .count();
 
         out.templates
             .resize_with(self.schedule.len(), Template::default);

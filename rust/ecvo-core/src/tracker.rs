@@ -13,7 +13,7 @@ use std::sync::Arc;
 
 use crate::Pose;
 use crate::camera::FrameView;
-use crate::config::{Config, ReferenceLevel};
+use crate::config::{Config, MotionPrior, ReferenceLevel};
 use crate::error::Result;
 use crate::motion::{MotionEstimator, MotionResult};
 use crate::prepare::{PreparedFrame, Preparer};
@@ -59,6 +59,11 @@ pub struct FrameOutput {
     /// After too many lost frames the tracker started afresh at this frame, keeping
     /// the last good pose.
     pub reanchored: bool,
+    /// [A] failed but the frame registered against a kept reference frame instead.
+    pub recovered: bool,
+    /// Corrections of this frame that failed or were rejected (it kept the pose it
+    /// had before each of them and did not become that level's reference).
+    pub refused_corrections: u8,
 }
 
 /// The counters of the paper's Table 1, and what went wrong.
@@ -72,10 +77,66 @@ pub struct Counters {
     pub references: Vec<u64>,
     /// Frames that did not register against the previous frame.
     pub lost_frames: u64,
-    /// Corrections ([B], [C], ...) that failed; the frame kept its uncorrected pose.
+    /// Corrections ([B], [C], ...) that failed; the frame kept its uncorrected pose
+    /// and did not become a reference at that level or above.
     pub failed_corrections: u64,
+    /// Corrections that converged implausibly far from their initial guess
+    /// ([`Config::max_correction_distance`]) and were rejected like failed ones.
+    pub rejected_corrections: u64,
+    /// References that were replaced without a correction after
+    /// [`MAX_REFUSED_CORRECTIONS`] refused corrections in a row against them (they
+    /// also count in `references`).
+    pub stale_references: u64,
+    /// Frames whose [A] failed but that registered against a kept reference frame.
+    pub recovered_frames: u64,
+    /// [A]s that started from the constant-velocity prediction rather than the
+    /// identity (the prediction explained the coarsest level better).
+    pub predicted_starts: u64,
     /// Times the tracker started afresh after a run of lost frames.
     pub reanchors: u64,
+}
+
+/// After this many refused (failed or rejected) corrections in a row against the
+/// same reference, the next frame that calls for a correction at that level becomes
+/// its reference without one: the old reference is out of reach.
+pub const MAX_REFUSED_CORRECTIONS: u32 = 3;
+
+/// The motion of the last frame registered frame to frame, for the
+/// constant-velocity prediction of the next one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Velocity {
+    /// Index of the frame it ends at.
+    pub index: u64,
+    /// Its [A]: `T_{c,p}`.
+    pub motion: Pose,
+    /// Time between the two frames (seconds).
+    pub dt: f64,
+}
+
+/// The constant-velocity prediction of `T_{c,p}` for a frame `dt` seconds after its
+/// previous one, from the previous frame's [A] `v` over `v.dt` seconds: `v`'s twist
+/// scaled by `dt / v.dt` (at most 4, and `v` itself when the stamps cannot say).
+/// `None` when there is nothing to predict (no motion, or a non-finite one).
+pub fn predict(v: &Velocity, dt: f64) -> Option<Pose> {
+    let ratio = if v.dt > 0.0 && dt > 0.0 && (dt / v.dt).is_finite() {
+        (dt / v.dt).min(4.0)
+    } else {
+        1.0
+    };
+    let xi = se3::log(&v.motion) * ratio;
+    let p = se3::exp(&xi);
+    (se3::is_finite(&p) && xi.iter().any(|x| *x != 0.0)).then_some(p)
+}
+
+/// How far a correction's result lies from its initial guess, in the metric of its
+/// information matrix: `δᵀ H δ / n`, the mean change of the whitened squared residuals
+/// (units of the residuals' variance) that the move from guess to result makes, for
+/// the twist δ between them and `n` residuals.
+pub fn correction_distance(init: &Pose, r: &MotionResult) -> f64 {
+    // MOTION moves T_{j→i} = pose⁻¹ by left perturbations: exp(δ) = pose⁻¹ · init.
+    let delta = se3::log(&se3::compose(&r.pose.inverse(), init));
+    let n = r.valid_pixels.max(1) as f64;
+    (delta.transpose() * r.information * delta)[(0, 0)] / n
 }
 
 /// A frame the tracker keeps, with its pose.
@@ -101,6 +162,9 @@ pub struct Tracker<F> {
     lost_run: u32,
     next_index: u64,
     state: TrackingState,
+    velocity: Option<Velocity>,
+    /// Refused corrections in a row against each level's current reference.
+    refused: Vec<u32>,
 }
 
 impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
@@ -119,6 +183,8 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             lost_run: 0,
             next_index: 0,
             state: TrackingState::Initialising,
+            velocity: None,
+            refused: vec![0; levels],
             config,
         })
     }
@@ -148,20 +214,38 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         self.prev.as_ref()
     }
 
+    /// The motion of the last frame registered frame to frame (what the next frame's
+    /// prediction comes from).
+    pub fn velocity(&self) -> Option<&Velocity> {
+        self.velocity.as_ref()
+    }
+
+    /// The constant-velocity prediction of [A] for a frame stamped `timestamp` that
+    /// registers against the previous frame, or `None` (the identity alone).
+    pub fn prior_for(&self, timestamp: f64) -> Option<Pose> {
+        if self.config.motion.prior != MotionPrior::ConstantVelocity {
+            return None;
+        }
+        let prev = self.prev.as_ref()?;
+        let v = self.velocity.as_ref().filter(|v| v.index == prev.index)?;
+        predict(v, timestamp - prev.frame.timestamp)
+    }
+
     /// Tracks one prepared frame (Figure 1(b)).
     pub fn track(&mut self, frame: F) -> FrameOutput {
-        self.track_with(frame, |_| None)
+        self.track_with(frame, |_, _| None)
     }
 
     /// Tracks one prepared frame whose [A] may have been computed ahead of time:
-    /// `ahead` is given the previous frame the tracker registers against and returns
-    /// [`frame_to_frame`]`(frame, previous)` if it was computed for exactly that pair,
-    /// `None` otherwise (then the tracker computes it). [A] depends on nothing but
-    /// the two frames, so the output is the same either way, bit for bit.
+    /// `ahead` is given the previous frame the tracker registers against and the
+    /// prediction it starts from, and returns [`frame_to_frame`]`(frame, previous,
+    /// prior)` if it was computed for exactly those, `None` otherwise (then the
+    /// tracker computes it). [A] depends on nothing but the two frames and the
+    /// prior, so the output is the same either way, bit for bit.
     pub fn track_with(
         &mut self,
         frame: F,
-        ahead: impl FnOnce(&F) -> Option<MotionResult>,
+        ahead: impl FnOnce(&F, Option<&Pose>) -> Option<MotionResult>,
     ) -> FrameOutput {
         let index = self.next_index;
         self.next_index += 1;
@@ -175,43 +259,57 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             motion_estimations: 0,
             frame_to_frame: None,
             reanchored: false,
+            recovered: false,
+            refused_corrections: 0,
         };
-        let Some(prev) = &self.prev else {
+        if self.prev.is_none() {
             self.anchor(frame, Pose::identity(), index);
             self.state = TrackingState::Tracking;
             return out;
+        }
+        let prior = self.prior_for(frame.timestamp);
+        let Some(prev) = &self.prev else {
+            unreachable!("checked above")
         };
 
-        // [A] frame to frame.
-        let f2f = match ahead(&prev.frame) {
+        // [A] frame to frame, from the identity or the prediction.
+        let f2f = match ahead(&prev.frame, prior.as_ref()) {
             Some(r) => r,
-            None => frame_to_frame(&mut self.estimator, &frame, &prev.frame, &self.config),
+            None => frame_to_frame(
+                &mut self.estimator,
+                &frame,
+                &prev.frame,
+                prior.as_ref(),
+                &self.config,
+            ),
         };
         out.motion_estimations += 1;
         self.counters.motion_estimations += 1;
         out.frame_to_frame = Some(f2f);
-        if !f2f.is_ok() {
-            self.counters.lost_frames += 1;
-            self.lost_run += 1;
-            out.pose = prev.pose;
-            out.state = TrackingState::Lost;
-            self.state = TrackingState::Lost;
-            if self.lost_run > self.config.max_lost_frames {
-                // The old frames are out of reach: start afresh here at the last good pose.
-                let pose = prev.pose;
-                self.anchor(frame, pose, index);
-                self.counters.reanchors += 1;
-                self.lost_run = 0;
-                out.reanchored = true;
+        let predicted = prior.map_or(Pose::identity(), |p| se3::compose(&prev.pose, &p));
+        let mut pose = if f2f.is_ok() {
+            if f2f.start > 0 {
+                self.counters.predicted_starts += 1;
             }
-            return out;
-        }
+            self.velocity = Some(Velocity {
+                index,
+                motion: f2f.pose,
+                dt: frame.timestamp - prev.frame.timestamp,
+            });
+            se3::compose(&prev.pose, &f2f.pose)
+        } else {
+            self.velocity = None;
+            match self.recover(&frame, &predicted, &mut out) {
+                Some(p) => p,
+                None => return self.lose(frame, index, out),
+            }
+        };
         self.lost_run = 0;
         self.state = TrackingState::Tracking;
-        let mut pose = se3::compose(&prev.pose, &f2f.pose);
 
         // [B], [C], ...: correct against each level's reference while the motion
-        // accumulated since it is large enough.
+        // accumulated since it is large enough. A correction that fails, or lands
+        // implausibly far from its guess, changes nothing and ends the climb.
         let mut became = 0usize;
         for (k, level) in self.config.reference_levels.iter().enumerate() {
             let Some(reference) = &self.refs[k] else {
@@ -221,30 +319,100 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             if !comp(&accumulated, level) {
                 break;
             }
+            if self.refused[k] >= MAX_REFUSED_CORRECTIONS {
+                // The reference is out of reach: replace it without a correction.
+                self.counters.stale_references += 1;
+                self.counters.references[k] += 1;
+                self.refused[k] = 0;
+                became = k + 1;
+                continue;
+            }
             let r =
                 self.estimator
                     .motion(&frame, &reference.frame, &accumulated, &self.config.motion);
             out.motion_estimations += 1;
             self.counters.motion_estimations += 1;
-            if r.is_ok() {
-                pose = se3::compose(&reference.pose, &r.pose);
-            } else {
+            if !r.is_ok() {
                 self.counters.failed_corrections += 1;
+            } else if correction_distance(&accumulated, &r) > self.config.max_correction_distance {
+                self.counters.rejected_corrections += 1;
+            } else {
+                pose = se3::compose(&reference.pose, &r.pose);
+                self.counters.references[k] += 1;
+                self.refused[k] = 0;
+                became = k + 1;
+                continue;
             }
-            self.counters.references[k] += 1;
-            became = k + 1;
+            self.refused[k] += 1;
+            out.refused_corrections += 1;
+            break;
         }
-        for r in &mut self.refs[..became] {
+        for (r, refused) in self.refs[..became].iter_mut().zip(&mut self.refused) {
             *r = Some(Kept {
                 frame: frame.clone(),
                 pose,
                 index,
             });
+            *refused = 0;
         }
         self.prev = Some(Kept { frame, pose, index });
         out.pose = pose;
         out.reference_levels = became as u8;
         out
+    }
+
+    /// [A] failed: registers the frame against the kept references (level 1 first,
+    /// each frame once), seeded with the predicted pose. Returns the pose found.
+    fn recover(&mut self, frame: &F, predicted: &Pose, out: &mut FrameOutput) -> Option<Pose> {
+        let prev_index = self.prev.as_ref().map(|p| p.index);
+        let mut tried: Option<u64> = prev_index;
+        for k in 0..self.refs.len() {
+            let Some(reference) = &self.refs[k] else {
+                continue;
+            };
+            if tried == Some(reference.index) {
+                continue;
+            }
+            tried = Some(reference.index);
+            let init = se3::compose(&reference.pose.inverse(), predicted);
+            let r = self
+                .estimator
+                .motion(frame, &reference.frame, &init, &self.config.motion);
+            out.motion_estimations += 1;
+            self.counters.motion_estimations += 1;
+            if r.is_ok() {
+                self.counters.recovered_frames += 1;
+                out.recovered = true;
+                return Some(se3::compose(&reference.pose, &r.pose));
+            }
+        }
+        None
+    }
+
+    /// The frame did not register: it keeps the last good pose; after too many in a
+    /// row the tracker starts afresh at a frame good enough to anchor on.
+    fn lose(&mut self, frame: F, index: u64, mut out: FrameOutput) -> FrameOutput {
+        let last_pose = self.prev.as_ref().map_or(Pose::identity(), |p| p.pose);
+        self.counters.lost_frames += 1;
+        self.lost_run += 1;
+        out.pose = last_pose;
+        out.state = TrackingState::Lost;
+        self.state = TrackingState::Lost;
+        if self.lost_run > self.config.max_lost_frames && self.can_anchor(&frame) {
+            // The old frames are out of reach: start afresh here at the last good pose.
+            self.anchor(frame, last_pose, index);
+            self.counters.reanchors += 1;
+            self.lost_run = 0;
+            out.reanchored = true;
+        }
+        out
+    }
+
+    /// True when `frame` has enough depth and texture to anchor tracking on.
+    pub fn can_anchor(&self, frame: &PreparedFrame) -> bool {
+        let n = self.config.camera.pixels().max(1) as f64;
+        frame.valid_depth as f64 >= self.config.min_anchor_depth_fraction * n
+            && frame.textured_pixels as f64 >= self.config.min_anchor_texture_fraction * n
     }
 
     /// Makes `frame` the previous frame and the reference at every level.
@@ -256,21 +424,33 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
                 index,
             });
         }
+        for r in &mut self.refused {
+            *r = 0;
+        }
+        self.velocity = None;
         self.prev = Some(Kept { frame, pose, index });
     }
 }
 
-/// [A] of Figure 1(b): `MOTION(Fc, Fp, I)`, the motion from the current frame to the
-/// previous one from the identity. It depends on the two frames alone, so it may run
-/// before the tracker reaches `current` (the pipeline's filter stage does so when the
-/// tracker is behind) and be handed to [`Tracker::track_with`].
+/// [A] of Figure 1(b): `MOTION(Fc, Fp, ·)`, the motion from the current frame to the
+/// previous one, from the identity and, when given, from the constant-velocity
+/// prediction `prior` (the better start at the coarsest step wins). It depends on
+/// the two frames and the prior alone, so it may run before the tracker reaches
+/// `current` (the pipeline's filter stage does so when the tracker is behind) and
+/// be handed to [`Tracker::track_with`].
 pub fn frame_to_frame(
     estimator: &mut MotionEstimator,
     current: &PreparedFrame,
     previous: &PreparedFrame,
+    prior: Option<&Pose>,
     config: &Config,
 ) -> MotionResult {
-    estimator.motion(current, previous, &Pose::identity(), &config.motion)
+    match prior {
+        Some(p) => {
+            estimator.motion_from(current, previous, &[Pose::identity(), *p], &config.motion)
+        }
+        None => estimator.motion(current, previous, &Pose::identity(), &config.motion),
+    }
 }
 
 /// The sequential engine: prepares each frame and tracks it, recycling prepared
