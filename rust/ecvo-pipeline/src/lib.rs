@@ -81,9 +81,10 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::{Receiver, SendTimeoutError, Sender, TrySendError};
+use ecvo_core::tracker::{Velocity, predict};
 use ecvo_core::{
-    Camera, Config, Counters, FrameOutput, FrameView, MotionEstimator, Pose, Preparer, Tracker,
-    TrackingState, frame_to_frame,
+    Camera, Config, Counters, FrameOutput, FrameView, MotionEstimator, MotionPrior, Pose, Preparer,
+    Tracker, TrackingState, frame_to_frame,
 };
 
 pub use geometry::{CloudPoint, GeometryOptions};
@@ -364,6 +365,10 @@ struct Shared {
     progress: Mutex<Progress>,
     progress_changed: Condvar,
     latest: Mutex<LatestPose>,
+    /// The tracker's velocity after its last frame: that frame's sequence and [A]
+    /// (motion and interval) when it registered frame to frame. The filter stage
+    /// restarts its [A]-ahead chain from it.
+    velocity: Mutex<Option<(u64, Option<(Pose, f64)>)>>,
     counters: Mutex<Counters>,
     trajectory: Mutex<Vec<PoseRecord>>,
     references: Mutex<Vec<PoseRecord>>,
@@ -609,6 +614,7 @@ impl Pipeline {
             }),
             progress: Mutex::new(Progress::default()),
             progress_changed: Condvar::new(),
+            velocity: Mutex::new(None),
             latest: Mutex::new(LatestPose {
                 tracked: 0,
                 sequence: 0,
@@ -982,6 +988,10 @@ fn filter_stage(s: &Shared, mut preparer: Preparer, config: &Config, compute: &r
         MotionEstimator::with_capacity(ecvo_core::prepare::max_template_points(config));
     // The frame prepared last, while the next one may still follow at once.
     let mut last: Option<PooledFrame> = None;
+    // What the tracker's prediction for the next frame will be, as far as this stage
+    // knows it: the [A] it computed ahead for the frame `last` (or that frame being
+    // the first, with nothing to predict from).
+    let mut chain = Chain::default();
     loop {
         let raw = match s.input.try_pop() {
             Some(raw) => raw,
@@ -1016,12 +1026,26 @@ fn filter_stage(s: &Shared, mut preparer: Preparer, config: &Config, compute: &r
             // The tracker is behind when its queue is full: this frame would wait.
             let behind = s.prepared.len() >= s.prepared.capacity();
             let ahead = match (&r, &last) {
-                (Ok(()), Some(prev)) if behind => Some(Ahead {
-                    against: prev.sequence(),
-                    result: frame_to_frame(&mut estimator, prepared, prev, config),
-                }),
+                (Ok(()), Some(prev)) => {
+                    let published = *lock(&s.velocity);
+                    let known = chain.prior(config, prev, prepared.timestamp, behind, published);
+                    known.map(|prior| Ahead {
+                        against: prev.sequence(),
+                        prior,
+                        result: frame_to_frame(
+                            &mut estimator,
+                            prepared,
+                            prev,
+                            prior.as_ref(),
+                            config,
+                        ),
+                    })
+                }
                 _ => None,
             };
+            if r.is_ok() {
+                chain.prepared(raw.sequence, prepared.timestamp, ahead.as_ref());
+            }
             (r, ahead, t0.elapsed())
         });
         slot_mut.meta = FrameMeta {
@@ -1060,6 +1084,75 @@ fn filter_stage(s: &Shared, mut preparer: Preparer, config: &Config, compute: &r
     }
 }
 
+/// The filter stage's knowledge of the tracker's constant-velocity prediction: the
+/// tracker predicts a frame's [A] from the previous frame's [A] (when that one
+/// registered), so the filter stage can compute [A] ahead with the same prior only
+/// if it computed the previous frame's [A] itself. The tracker checks the prior
+/// before it uses a result, so a wrong guess here costs time, never a pose.
+#[derive(Default)]
+struct Chain {
+    /// Frames prepared so far.
+    prepared: u64,
+    /// Sequence and timestamp of the last frame prepared, and its [A] if this stage
+    /// computed it: `Some(None)` when it failed (nothing to predict from).
+    last: Option<(u64, f64, Option<Option<(Pose, f64)>>)>,
+}
+
+impl Chain {
+    /// Whether to compute [A] ahead for a frame stamped `timestamp` registered
+    /// against `prev`, and with which prior (`Some(prior)`), or not (`None`): when the
+    /// tracker is `behind` and the prior is known from this stage's own chain, or
+    /// whatever the tracker's load when the tracker has just `published` its
+    /// velocity after `prev` (it is idle: the chain restarts at no cost in latency,
+    /// the work moving from one waiting stage to the other).
+    fn prior(
+        &self,
+        config: &Config,
+        prev: &PooledFrame,
+        timestamp: f64,
+        behind: bool,
+        published: Option<(u64, Option<(Pose, f64)>)>,
+    ) -> Option<Option<Pose>> {
+        let (seq, prev_stamp, own) = self.last?;
+        if seq != prev.sequence() {
+            return None;
+        }
+        let from_tracker = published.filter(|(s, _)| *s == seq).map(|(_, v)| v);
+        if !behind && from_tracker.is_none() {
+            return None;
+        }
+        if config.motion.prior != MotionPrior::ConstantVelocity {
+            return Some(None);
+        }
+        let a = if self.prepared == 1 {
+            // `prev` is the first frame: the tracker anchors on it, with no velocity.
+            None
+        } else {
+            from_tracker.or(own)?
+        };
+        Some(a.and_then(|(motion, dt)| {
+            let v = Velocity {
+                index: 0,
+                motion,
+                dt,
+            };
+            predict(&v, timestamp - prev_stamp)
+        }))
+    }
+
+    /// Records a prepared frame and the [A] computed ahead for it, if any.
+    fn prepared(&mut self, sequence: u64, timestamp: f64, ahead: Option<&Ahead>) {
+        let prev_stamp = self.last.map(|(_, t, _)| t);
+        let a = ahead.map(|a| {
+            a.result
+                .is_ok()
+                .then(|| (a.result.pose, timestamp - prev_stamp.unwrap_or(timestamp)))
+        });
+        self.prepared += 1;
+        self.last = Some((sequence, timestamp, a));
+    }
+}
+
 fn tracker_stage(
     s: &Shared,
     mut tracker: Tracker<PooledFrame>,
@@ -1077,8 +1170,10 @@ fn tracker_stage(
         let mut used_ahead = false;
         let (out, tracked_in) = compute.install(|| {
             let t0 = Instant::now();
-            let out = tracker.track_with(frame, |prev| {
-                let a = meta.ahead.filter(|a| a.against == prev.sequence())?;
+            let out = tracker.track_with(frame, |prev, prior| {
+                let a = meta
+                    .ahead
+                    .filter(|a| a.against == prev.sequence() && a.prior.as_ref() == prior)?;
                 used_ahead = true;
                 Some(a.result)
             });
@@ -1087,6 +1182,13 @@ fn tracker_stage(
         if used_ahead {
             s.update_progress(|p| p.ahead_used += 1);
         }
+        *lock(&s.velocity) = Some((
+            meta.sequence,
+            tracker
+                .velocity()
+                .filter(|v| v.index == out.index)
+                .map(|v| (v.motion, v.dt)),
+        ));
 
         let anchored = out.index == 0 || out.reanchored;
         let reference_levels = if anchored {

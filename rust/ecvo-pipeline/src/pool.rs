@@ -31,11 +31,14 @@ pub(crate) struct FrameMeta {
     pub ahead: Option<Ahead>,
 }
 
-/// `frame_to_frame(this frame, the frame of sequence `against`)`, computed ahead.
+/// `frame_to_frame(this frame, the frame of sequence `against`, prior)`, computed
+/// ahead.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Ahead {
     /// Sequence of the previous frame it registered against.
     pub against: u64,
+    /// The constant-velocity prediction it started from (besides the identity).
+    pub prior: Option<ecvo_core::Pose>,
     /// The result.
     pub result: ecvo_core::MotionResult,
 }

@@ -187,6 +187,10 @@ pub(crate) fn copy_counters(dst: &mut Counters, src: &Counters) {
         references,
         lost_frames,
         failed_corrections,
+        rejected_corrections,
+        stale_references,
+        recovered_frames,
+        predicted_starts,
         reanchors,
     } = src;
     dst.frames = *frames;
@@ -194,6 +198,10 @@ pub(crate) fn copy_counters(dst: &mut Counters, src: &Counters) {
     dst.references.clone_from(references);
     dst.lost_frames = *lost_frames;
     dst.failed_corrections = *failed_corrections;
+    dst.rejected_corrections = *rejected_corrections;
+    dst.stale_references = *stale_references;
+    dst.recovered_frames = *recovered_frames;
+    dst.predicted_starts = *predicted_starts;
     dst.reanchors = *reanchors;
 }
 
