@@ -17,12 +17,12 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use ecvo_core::{Mode, Preset};
+use ecvo_core::{DepthNoiseModel, Mode, MotionPrior, Preset, Weighting};
 use ecvo_io::Trajectory;
 use serde_json::json;
 
 use crate::plot::Plane;
-use crate::run::{Evaluation, RunOutputs, TrackSettings};
+use crate::run::{EngineChoice, Evaluation, RunOutputs, TrackSettings};
 use crate::synth::Noise;
 
 #[derive(Parser)]
@@ -90,6 +90,12 @@ enum Command {
         seqs: Vec<PathBuf>,
         #[command(flatten)]
         track: TrackArgs,
+        /// Frame steps to run each sequence at, e.g. 1,2,3,4 (overrides --frame-step).
+        #[arg(long, value_delimiter = ',')]
+        frame_steps: Vec<u32>,
+        /// Also write every row as JSON lines to this file.
+        #[arg(long)]
+        json: Option<PathBuf>,
     },
     /// Render a synthetic 320x180 phone-like stream with exact ground truth.
     Synth {
@@ -127,6 +133,53 @@ struct TrackArgs {
     /// stages overlap; the poses are the same whatever the number).
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=256))]
     threads: u32,
+    /// Track every Nth frame only (frames 0, N, 2N, ...): N times the motion between
+    /// tracked frames, the standard way to test fast motion on recorded data.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    frame_step: u32,
+    /// The paper's method as written (Table 1): its 8/4/2 sampling, one scalar
+    /// scale with λ, [A] from the identity, every converged correction accepted.
+    /// The options below override single parts of it.
+    #[arg(long)]
+    paper: bool,
+    /// Coarse-to-fine schedule: paper (every 8th/4th/2nd full-resolution pixel),
+    /// pyramid (1/8 to full resolution), pyramid-stride2 (1/8 to 1/2, then every
+    /// second full-resolution pixel).
+    #[arg(long)]
+    schedule: Option<String>,
+    /// Residual weighting: scalar (one σ² over r_I and λ r_Z) or bivariate (Kerl et
+    /// al.'s 2x2 scale matrix).
+    #[arg(long, value_enum)]
+    weighting: Option<WeightingArg>,
+    /// Depth residual noise: constant, or quadratic (σ grows with z²).
+    #[arg(long, value_enum)]
+    depth_noise: Option<DepthNoiseArg>,
+    /// What [A] starts from: identity, or velocity (constant-velocity prediction,
+    /// with the identity tried too).
+    #[arg(long, value_enum)]
+    prior: Option<PriorArg>,
+    /// Reject a correction that moves further than this from its initial guess
+    /// (mean change of the whitened squared residuals; `inf` accepts all).
+    #[arg(long)]
+    max_correction_distance: Option<f64>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum WeightingArg {
+    Scalar,
+    Bivariate,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum DepthNoiseArg {
+    Constant,
+    Quadratic,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum PriorArg {
+    Identity,
+    Velocity,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -144,7 +197,26 @@ enum PresetArg {
 
 impl TrackArgs {
     fn settings(&self, mode: Mode) -> TrackSettings {
+        let engine = EngineChoice {
+            paper: self.paper,
+            schedule: self.schedule.clone(),
+            weighting: self.weighting.map(|w| match w {
+                WeightingArg::Scalar => Weighting::Scalar,
+                WeightingArg::Bivariate => Weighting::Bivariate,
+            }),
+            depth_noise: self.depth_noise.map(|d| match d {
+                DepthNoiseArg::Constant => DepthNoiseModel::Constant,
+                DepthNoiseArg::Quadratic => DepthNoiseModel::Quadratic,
+            }),
+            prior: self.prior.map(|p| match p {
+                PriorArg::Identity => MotionPrior::Identity,
+                PriorArg::Velocity => MotionPrior::ConstantVelocity,
+            }),
+            max_correction_distance: self.max_correction_distance,
+        };
         TrackSettings {
+            frame_step: self.frame_step as usize,
+            engine,
             mode,
             preset: match self.preset {
                 PresetArg::Pc => Preset::Pc,
@@ -222,7 +294,19 @@ fn dispatch(command: Command) -> Result<()> {
             run::run_command(&seq, &settings, &outs)
         }
         Command::Eval { gt, est, json } => eval_command(&gt, &est, json),
-        Command::Table { seqs, track } => table::table_command(&seqs, &track.settings(Mode::L2)),
+        Command::Table {
+            seqs,
+            track,
+            frame_steps,
+            json,
+        } => {
+            let steps: Vec<usize> = if frame_steps.is_empty() {
+                vec![track.frame_step as usize]
+            } else {
+                frame_steps.iter().map(|&s| s.max(1) as usize).collect()
+            };
+            table::table_command(&seqs, &track.settings(Mode::L2), &steps, json.as_deref())
+        }
         Command::Synth {
             out,
             frames,

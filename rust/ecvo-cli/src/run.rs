@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use ecvo_core::config::parse_levels;
-use ecvo_core::{Camera, Config, Mode, Preset, ReferenceLevel, TrackingState};
+use ecvo_core::motion::Status;
+use ecvo_core::{Camera, Config, Mode, Preset, ReferenceLevel, Schedule, TrackingState};
 use ecvo_io::eval::{AteResult, RpeResult};
 use ecvo_io::{Sequence, Trajectory};
 use serde::Serialize;
@@ -38,6 +39,48 @@ pub struct TrackSettings {
     pub max_frames: Option<usize>,
     /// Worker threads.
     pub threads: usize,
+    /// Track every this-many-th frame.
+    pub frame_step: usize,
+    /// Which engine settings, beyond the preset's thresholds.
+    pub engine: EngineChoice,
+}
+
+/// The engine's method: ecvo's defaults, or the paper's as written, with single
+/// parts overridden.
+#[derive(Clone, Debug, Default)]
+pub struct EngineChoice {
+    /// Start from [`Config::paper`] instead of [`Config::new`].
+    pub paper: bool,
+    /// Coarse-to-fine schedule by name.
+    pub schedule: Option<String>,
+    /// Residual weighting.
+    pub weighting: Option<ecvo_core::Weighting>,
+    /// Depth noise model.
+    pub depth_noise: Option<ecvo_core::DepthNoiseModel>,
+    /// What [A] starts from.
+    pub prior: Option<ecvo_core::MotionPrior>,
+    /// Correction gate.
+    pub max_correction_distance: Option<f64>,
+}
+
+impl EngineChoice {
+    /// A short description for tables and summaries.
+    pub fn describe(&self, config: &Config) -> String {
+        let m = &config.motion;
+        let schedule = [
+            Schedule::PaperSampling,
+            Schedule::Pyramid,
+            Schedule::PyramidStride2,
+        ]
+        .into_iter()
+        .find(|s| s.levels() == m.levels)
+        .map_or("custom", |s| s.name());
+        format!(
+            "schedule {schedule}, {:?} weighting, {:?} depth noise, {:?} prior, correction gate {}",
+            m.weighting, m.depth_noise, m.prior, config.max_correction_distance
+        )
+        .to_lowercase()
+    }
 }
 
 /// Name of a mode as the command line spells it.
@@ -79,7 +122,7 @@ impl TrackSettings {
             ),
             None => None,
         };
-        Ok(Sequence::open(seq, camera)?)
+        Ok(Sequence::open(seq, camera)?.every_nth(self.frame_step))
     }
 
     /// The tracker configuration for `camera`.
@@ -87,7 +130,28 @@ impl TrackSettings {
     /// The reference levels are `--levels` if given, else the preset's; the mode keeps
     /// none of them (naive), the first (l1) or all of them (l2, at least two).
     pub fn config(&self, camera: Camera) -> Result<Config> {
-        let mut config = Config::new(camera, self.preset, Mode::L2);
+        let mut config = if self.engine.paper {
+            Config::paper(camera, self.preset, Mode::L2)
+        } else {
+            Config::new(camera, self.preset, Mode::L2)
+        };
+        let e = &self.engine;
+        if let Some(name) = &e.schedule {
+            let schedule: Schedule = name.parse().with_context(|| format!("--schedule {name}"))?;
+            config.motion.levels = schedule.levels();
+        }
+        if let Some(w) = e.weighting {
+            config.motion.weighting = w;
+        }
+        if let Some(d) = e.depth_noise {
+            config.motion.depth_noise = d;
+        }
+        if let Some(p) = e.prior {
+            config.motion.prior = p;
+        }
+        if let Some(d) = e.max_correction_distance {
+            config.max_correction_distance = d;
+        }
         if let Some(text) = &self.levels {
             config.reference_levels =
                 parse_levels(text).with_context(|| format!("--levels `{text}`"))?;
@@ -314,6 +378,7 @@ pub fn run_command(seq: &Path, settings: &TrackSettings, outs: &RunOutputs) -> R
 
     t.trajectory.write_tum(out.join("trajectory.txt"))?;
     write_references(&out.join("references.txt"), &t)?;
+    write_states(&out.join("states.txt"), &t)?;
     let cloud_points = write_cloud(&out.join("cloud.ply"), &t)?;
     let svg = out.join("trajectory.svg");
     write_trajectory_svg(
@@ -373,8 +438,18 @@ fn summary_json(
         "motion_estimations": c.motion_estimations,
         "references": c.references,
         "lost_frames": c.lost_frames,
+        "lost_frame_indices": t.run.outputs.iter()
+            .filter(|o| o.state == TrackingState::Lost)
+            .map(|o| o.index)
+            .collect::<Vec<_>>(),
+        "recovered_frames": c.recovered_frames,
         "failed_corrections": c.failed_corrections,
+        "rejected_corrections": c.rejected_corrections,
+        "stale_references": c.stale_references,
+        "predicted_starts": c.predicted_starts,
         "reanchors": c.reanchors,
+        "frame_step": settings.frame_step,
+        "engine": settings.engine.describe(&t.config),
         "ground_truth": t.sequence.groundtruth().is_some(),
         "ate_rmse_m": t.eval.ate.as_ref().map(|a| a.rmse),
         "ate": t.eval.ate_json(),
@@ -488,6 +563,56 @@ fn human_summary(seq: &Path, t: &Tracked, s: &StageStats, out: &Path) -> String 
     );
     let _ = writeln!(r, "wrote {}", out.display());
     r
+}
+
+/// `states.txt`: one line per frame, in the order of `trajectory.txt`, with what the
+/// tracker said about it (the TUM trajectory itself stays standard).
+fn write_states(path: &Path, t: &Tracked) -> Result<()> {
+    let mut text = String::from(concat!(
+        "# per-frame tracking state, one line per line of trajectory.txt\n",
+        "# timestamp frame_index state reference_levels motion_estimations recovered reanchored",
+        " refused_corrections f2f_status f2f_sigma_i f2f_sigma_z\n",
+        "# state: tracking | lost (a lost frame's pose is the last good one)\n",
+        "# f2f_status: [A]'s outcome (converged, max_iterations or failed_<why>; - for the first frame)\n",
+        "# f2f_sigma_i, f2f_sigma_z: robust scale of its photometric and gain-scaled depth residuals\n",
+    ));
+    let sigma = |x: f64| {
+        if x.is_finite() {
+            format!("{:.5}", x.sqrt())
+        } else {
+            "nan".into()
+        }
+    };
+    for o in &t.run.outputs {
+        let state = match o.state {
+            TrackingState::Lost => "lost",
+            _ => "tracking",
+        };
+        let (status, si, sz) = match &o.frame_to_frame {
+            None => ("-".to_string(), "nan".to_string(), "nan".to_string()),
+            Some(r) => (
+                match r.status {
+                    Status::Converged => "converged".to_string(),
+                    Status::MaxIterations => "max_iterations".to_string(),
+                    Status::Failed(f) => format!("failed_{f:?}").to_lowercase(),
+                },
+                r.scale.map_or("nan".into(), |s| sigma(s.ii)),
+                r.scale.map_or("nan".into(), |s| sigma(s.zz)),
+            ),
+        };
+        let _ = writeln!(
+            text,
+            "{:.6} {} {state} {} {} {} {} {} {status} {si} {sz}",
+            o.timestamp,
+            o.index,
+            o.reference_levels,
+            o.motion_estimations,
+            u8::from(o.recovered),
+            u8::from(o.reanchored),
+            o.refused_corrections
+        );
+    }
+    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
 }
 
 /// `references.txt`: one line per frame that became a reference frame.

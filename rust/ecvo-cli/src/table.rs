@@ -1,52 +1,88 @@
-//! `ecvo table`: the paper's Table 1 (naive, L1, L2) for a set of sequences.
+//! `ecvo table`: the paper's Table 1 (naive, L1, L2) for a set of sequences, at one
+//! or more frame steps (every Nth frame: the robustness suite for fast motion).
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use ecvo_core::Mode;
+use serde_json::json;
 
 use crate::engine::CloudFrames;
 use crate::run::{StageStats, TrackSettings, track};
 
-/// Tracks every sequence in the three modes and prints one Markdown table per
-/// sequence.
-pub fn table_command(seqs: &[PathBuf], base: &TrackSettings) -> Result<()> {
+/// Tracks every sequence at every frame step in the three modes and prints one
+/// Markdown table per sequence; with `json`, also one JSON line per row.
+pub fn table_command(
+    seqs: &[PathBuf],
+    base: &TrackSettings,
+    steps: &[usize],
+    json_path: Option<&Path>,
+) -> Result<()> {
+    let mut json_out = match json_path {
+        Some(p) => {
+            Some(std::fs::File::create(p).with_context(|| format!("creating {}", p.display()))?)
+        }
+        None => None,
+    };
     for (k, seq) in seqs.iter().enumerate() {
         let mut rows = Vec::new();
-        let mut frames = 0;
-        for (mode, name) in [(Mode::Naive, "naive"), (Mode::L1, "L1"), (Mode::L2, "L2")] {
-            let settings = TrackSettings {
-                mode,
-                ..base.clone()
-            };
-            let t = track(seq, &settings, CloudFrames::None, 1)?;
-            let c = &t.run.counters;
-            frames = c.frames;
-            let refs = match c.references.as_slice() {
-                [] => "-".to_string(),
-                [a] => format!("{a}/-"),
-                r => r
-                    .iter()
-                    .map(|n| n.to_string())
-                    .collect::<Vec<_>>()
-                    .join("/"),
-            };
-            let ate = t
-                .eval
-                .ate
-                .as_ref()
-                .map_or("n/a".to_string(), |a| format!("{:.4}", a.rmse));
-            let s = StageStats::of(&t.run);
-            let lost = if c.lost_frames > 0 {
-                format!(" ({} lost)", c.lost_frames)
-            } else {
-                String::new()
-            };
-            rows.push(format!(
-                "| {name} | {ate} | {}{lost} | {refs} | {:.2} |",
-                c.motion_estimations, s.total.mean
-            ));
+        let mut engine = String::new();
+        for &step in steps {
+            for (mode, name) in [(Mode::Naive, "naive"), (Mode::L1, "L1"), (Mode::L2, "L2")] {
+                let settings = TrackSettings {
+                    mode,
+                    frame_step: step,
+                    ..base.clone()
+                };
+                let t = track(seq, &settings, CloudFrames::None, 1)?;
+                engine = settings.engine.describe(&t.config);
+                let c = &t.run.counters;
+                let refs = match c.references.as_slice() {
+                    [] => "-".to_string(),
+                    [a] => format!("{a}/-"),
+                    r => r
+                        .iter()
+                        .map(|n| n.to_string())
+                        .collect::<Vec<_>>()
+                        .join("/"),
+                };
+                let ate = t.eval.ate.as_ref().map(|a| a.rmse);
+                let s = StageStats::of(&t.run);
+                let lost = if c.lost_frames > 0 {
+                    format!(" ({} lost)", c.lost_frames)
+                } else {
+                    String::new()
+                };
+                rows.push(format!(
+                    "| {step} | {} | {name} | {} | {}{lost} | {refs} | {:.2} |",
+                    c.frames,
+                    ate.map_or("n/a".to_string(), |a| format!("{a:.4}")),
+                    c.motion_estimations,
+                    s.total.mean
+                ));
+                if let Some(f) = &mut json_out {
+                    let row = json!({
+                        "sequence": seq.display().to_string(),
+                        "frame_step": step,
+                        "frames": c.frames,
+                        "mode": name,
+                        "ate_rmse_m": ate,
+                        "motion_estimations": c.motion_estimations,
+                        "references": c.references,
+                        "lost_frames": c.lost_frames,
+                        "recovered_frames": c.recovered_frames,
+                        "failed_corrections": c.failed_corrections,
+                        "rejected_corrections": c.rejected_corrections,
+                        "ms_per_frame": s.total.mean,
+                        "filter_ms": s.filter.mean,
+                        "tracker_ms": s.tracker.mean,
+                        "engine": engine,
+                    });
+                    writeln!(f, "{row}").context("writing the JSON rows")?;
+                }
+            }
         }
         let mut out = String::new();
         if k > 0 {
@@ -54,15 +90,15 @@ pub fn table_command(seqs: &[PathBuf], base: &TrackSettings) -> Result<()> {
         }
         let _ = writeln!(
             out,
-            "### {} ({frames} frames, preset {})\n",
+            "### {} (preset {}; {engine})\n",
             seq.display(),
             crate::run::preset_name(base.preset)
         );
         let _ = writeln!(
             out,
-            "| method | ATE RMSE (m) | motion estimations | references L1/L2 | ms per frame |"
+            "| frame step | frames | method | ATE RMSE (m) | motion estimations | references L1/L2 | ms per frame |"
         );
-        let _ = writeln!(out, "|---|---|---|---|---|");
+        let _ = writeln!(out, "|---|---|---|---|---|---|---|");
         for r in rows {
             let _ = writeln!(out, "{r}");
         }

@@ -194,6 +194,18 @@ impl Sequence {
         self.groundtruth.as_ref()
     }
 
+    /// The same sequence with only every `step`-th frame (frames `0, step, 2·step, …`),
+    /// the standard way to test fast motion on recorded data: each kept frame is
+    /// `step` times further from the previous one. `step` 0 or 1 keeps every frame.
+    pub fn every_nth(&self, step: usize) -> Sequence {
+        let step = step.max(1);
+        let frames: Vec<FrameInfo> = self.frames.iter().step_by(step).cloned().collect();
+        Sequence {
+            frames: frames.into(),
+            ..self.clone()
+        }
+    }
+
     /// Decodes frame `index` into a new [`Frame`].
     pub fn load_frame(&self, index: usize) -> Result<Frame> {
         let mut frame = Frame::default();
