@@ -23,7 +23,7 @@ use serde_json::json;
 
 use crate::plot::Plane;
 use crate::run::{EngineChoice, Evaluation, RunOutputs, TrackSettings};
-use crate::synth::Noise;
+use crate::synth::{Motion, Noise};
 
 #[derive(Parser)]
 #[command(
@@ -114,6 +114,21 @@ enum Command {
         /// Timestamp of the first frame, seconds.
         #[arg(long, default_value_t = 1_700_000_000.0)]
         start_time: f64,
+        /// Camera motion: the slow hand-held walk around the room, or fast hand-held
+        /// shaking and panning in front of a wall (see --depth, --max-rot-speed,
+        /// --max-speed).
+        #[arg(long, value_enum, default_value_t = Motion::Slow)]
+        motion: Motion,
+        /// Fast motion: distance from the camera to the wall it looks at, metres
+        /// (0.4–4.5; the mean viewing depth is within about 10 % of it).
+        #[arg(long)]
+        depth: Option<f64>,
+        /// Fast motion: peak rotation rate between frames, degrees per second.
+        #[arg(long)]
+        max_rot_speed: Option<f64>,
+        /// Fast motion: peak speed between frames, metres per second.
+        #[arg(long)]
+        max_speed: Option<f64>,
     },
 }
 
@@ -313,7 +328,23 @@ fn dispatch(command: Command) -> Result<()> {
             seed,
             noise,
             start_time,
-        } => synth::synth_command(&out, frames, seed, noise, start_time),
+            motion,
+            depth,
+            max_rot_speed,
+            max_speed,
+        } => synth::synth_command(
+            &out,
+            frames,
+            seed,
+            noise,
+            start_time,
+            &synth::MotionArgs {
+                motion,
+                depth,
+                max_rot_speed_deg: max_rot_speed,
+                max_speed,
+            },
+        ),
     }
 }
 

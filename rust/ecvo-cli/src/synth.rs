@@ -6,7 +6,7 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use ecvo_core::Camera;
 use ecvo_io::{SequenceWriter, Trajectory};
-use ecvo_synth::{DepthNoise, SynthSequence};
+use ecvo_synth::{DepthNoise, FAST_MAX_ANGULAR_SPEED, FAST_MAX_LINEAR_SPEED, SynthSequence};
 
 /// The sensor noise model of `ecvo synth --noise`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -29,8 +29,74 @@ impl Noise {
     }
 }
 
-/// Renders `frames` frames of [`SynthSequence::phone_320x180`] with `seed` and writes
-/// them to `out` (TUM layout, `camera.json`, `groundtruth.txt`). Frame `i` is stamped
+/// The camera motion of `ecvo synth --motion`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Motion {
+    /// The slow hand-held walk around the room (`CameraPath::handheld`).
+    Slow,
+    /// Fast hand-held motion in front of a wall (`CameraPath::fast_handheld`).
+    Fast,
+}
+
+/// The motion flags of `ecvo synth`.
+#[derive(Clone, Copy, Debug)]
+pub struct MotionArgs {
+    /// Slow or fast.
+    pub motion: Motion,
+    /// Fast only: distance to the wall looked at, metres (default 2).
+    pub depth: Option<f64>,
+    /// Fast only: peak rotation rate, degrees per second (default 90).
+    pub max_rot_speed_deg: Option<f64>,
+    /// Fast only: peak speed, metres per second (default 1).
+    pub max_speed: Option<f64>,
+}
+
+impl MotionArgs {
+    /// The sequence (noise still the preset's), or an error naming the flag that is out
+    /// of range or given without `--motion fast`.
+    fn sequence(&self, frames: usize, seed: u64) -> Result<SynthSequence> {
+        match self.motion {
+            Motion::Slow => {
+                for (flag, given) in [
+                    ("--depth", self.depth.is_some()),
+                    ("--max-rot-speed", self.max_rot_speed_deg.is_some()),
+                    ("--max-speed", self.max_speed.is_some()),
+                ] {
+                    if given {
+                        bail!("{flag} needs --motion fast");
+                    }
+                }
+                Ok(SynthSequence::phone_320x180(frames, seed))
+            }
+            Motion::Fast => {
+                let depth = self.depth.unwrap_or(2.0);
+                if !(0.4..=4.5).contains(&depth) {
+                    bail!("--depth must be between 0.4 and 4.5 m, got {depth}");
+                }
+                let w = self
+                    .max_rot_speed_deg
+                    .map_or(FAST_MAX_ANGULAR_SPEED, f64::to_radians);
+                if !(w > 0.0 && w <= 720f64.to_radians()) {
+                    bail!(
+                        "--max-rot-speed must be in (0, 720] deg/s, got {}",
+                        w.to_degrees()
+                    );
+                }
+                let v = self.max_speed.unwrap_or(FAST_MAX_LINEAR_SPEED);
+                if !(v > 0.0 && v <= 5.0) {
+                    bail!("--max-speed must be in (0, 5] m/s, got {v}");
+                }
+                Ok(SynthSequence::fast_handheld_320x180(
+                    frames, seed, depth, w, v,
+                ))
+            }
+        }
+    }
+}
+
+/// Renders `frames` frames of [`SynthSequence::phone_320x180`] with `seed` (or of
+/// [`SynthSequence::fast_handheld_320x180`] with `--motion fast`) and writes them to `out` (TUM
+/// layout, `camera.json`, `groundtruth.txt`). Frame `i` is stamped
 /// `start_time + i / 30` seconds (as written, to the microsecond); the ground truth
 /// holds exactly the rendered poses at those stamps.
 pub fn synth_command(
@@ -39,6 +105,7 @@ pub fn synth_command(
     seed: u64,
     noise: Noise,
     start_time: f64,
+    motion: &MotionArgs,
 ) -> Result<()> {
     if frames < 2 {
         bail!("--frames must be at least 2, got {frames}");
@@ -46,7 +113,7 @@ pub fn synth_command(
     if !(start_time.is_finite() && start_time >= 0.0) {
         bail!("--start-time must be finite and not negative, got {start_time}");
     }
-    let mut seq = SynthSequence::phone_320x180(frames, seed);
+    let mut seq = motion.sequence(frames, seed)?;
     seq.noise = noise.model();
     let c = seq.camera;
     let camera = Camera {
@@ -73,10 +140,11 @@ pub fn synth_command(
     writer.write_groundtruth(&gt)?;
     let n = writer.finish()?;
     println!(
-        "wrote {n} frames ({}x{}, depth in 1/{} m, noise {noise:?}, seed {seed}) to {}",
+        "wrote {n} frames ({}x{}, depth in 1/{} m, noise {noise:?}, motion {:?}, seed {seed}) to {}",
         camera.width,
         camera.height,
         camera.depth_scale,
+        motion.motion,
         out.display()
     );
     Ok(())

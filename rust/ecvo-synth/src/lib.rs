@@ -7,8 +7,10 @@
 //!   angle and surface ids for a camera-to-world pose.
 //! * [`DepthNoise`] / [`apply_noise`]: sensor noise (depth-squared Gaussian noise,
 //!   disparity quantisation, grazing-angle, edge and random dropouts, image noise).
-//! * [`CameraPath`]: smooth analytic trajectories (orbit, hand-held).
-//! * [`SynthSequence`]: everything together, frame by frame.
+//! * [`CameraPath`]: smooth analytic trajectories (orbit, slow hand-held walk, fast
+//!   hand-held shaking and panning at a chosen depth).
+//! * [`SynthSequence`]: everything together, frame by frame
+//!   ([`SynthSequence::phone_320x180`], [`SynthSequence::fast_320x180`]).
 //!
 //! Pure and deterministic: no I/O, no threads, no global state.
 
@@ -22,7 +24,9 @@ mod sequence;
 
 pub use camera::SynthCamera;
 pub use noise::{DepthNoise, EdgeDropout, apply_noise, edge_mask, metres_to_raw, to_raw_depth};
-pub use path::{CameraPath, Harmonic, look_at};
+pub use path::{CameraPath, FAST_PERIOD_S, Harmonic, look_at};
 pub use render::{NO_SURFACE, Rendered, render, render_supersampled};
 pub use scene::{Hit, ROOM_SURFACES, RayOrigin, Scene, SceneBox, Texture};
-pub use sequence::{SynthFrame, SynthSequence};
+pub use sequence::{
+    FAST_MAX_ANGULAR_SPEED, FAST_MAX_LINEAR_SPEED, FAST_WALL_SURFACE, SynthFrame, SynthSequence,
+};

@@ -169,3 +169,129 @@ impl CameraPath {
         )
     }
 }
+
+/// Period of [`CameraPath::fast_handheld`], seconds: every frequency of that path is a
+/// whole multiple of `2π / FAST_PERIOD_S`, so any 5 s of it holds its peak speeds.
+pub const FAST_PERIOD_S: f64 = 5.0;
+
+/// Height of the camera of [`CameraPath::fast_handheld`] above the floor, metres.
+const FAST_HEIGHT_M: f64 = 1.5;
+
+/// World y of the camera of [`CameraPath::fast_handheld`], metres: clear of the central
+/// box cluster (|y| < 0.6) and of the chest against the far wall (y < -0.2).
+const FAST_Y_M: f64 = 0.9;
+
+/// A harmonic of [`CameraPath::fast_handheld`]: random whole multiple `k` of the base
+/// frequency `2π / FAST_PERIOD_S` in `k_lo..=k_hi`, random phase, unit amplitude
+/// times `weight`.
+fn fast_harmonic(rng: &mut Rng, weight: f64, k_lo: u64, k_hi: u64) -> Harmonic {
+    let k = k_lo + rng.next_u64() % (k_hi - k_lo + 1);
+    Harmonic {
+        amplitude: weight,
+        omega: k as f64 * std::f64::consts::TAU / FAST_PERIOD_S,
+        phase: rng.angle(),
+    }
+}
+
+/// Scales the amplitudes of harmonics.
+fn scaled(terms: &[Harmonic], s: f64) -> Vec<Harmonic> {
+    terms
+        .iter()
+        .map(|h| Harmonic {
+            amplitude: h.amplitude * s,
+            ..*h
+        })
+        .collect()
+}
+
+/// Peak frame-to-frame (`dt` apart) linear (m/s) and angular (rad/s) speeds of a path,
+/// over every start time on a fine grid of one period of [`CameraPath::fast_handheld`].
+pub(crate) fn peak_speeds(path: &CameraPath, dt: f64) -> (f64, f64) {
+    const STEPS: usize = 600;
+    let (mut v, mut w) = (0.0f64, 0.0f64);
+    for i in 0..STEPS {
+        let t = i as f64 * FAST_PERIOD_S / STEPS as f64;
+        let rel = path.pose_at(t).inverse() * path.pose_at(t + dt);
+        v = v.max(rel.translation.vector.norm() / dt);
+        w = w.max(rel.rotation.angle() / dt);
+    }
+    (v, w)
+}
+
+impl CameraPath {
+    /// Fast hand-held motion in front of the wall `x = 3` of [`crate::Scene::room`],
+    /// seen from `depth` metres (0.5–4 m): the camera stands at
+    /// `(3 − depth, 0.9, 1.5)`, looks along +x and shakes, sways and pans so that its
+    /// peak speed over 30 Hz frames is exactly `max_linear_speed` (m/s) and its peak
+    /// rotation rate exactly `max_angular_speed` (rad/s).
+    ///
+    /// The path is periodic with period [`FAST_PERIOD_S`] (5 s, 150 frames at 30 Hz),
+    /// so every 150 consecutive frames reach both peaks (within the 30 Hz sampling of
+    /// that period). Translation: sums of sinusoids mostly across the view (sideways and
+    /// up and down), little along it, so the distance to the wall stays near `depth`.
+    /// Rotation: the look-at target moves with the camera plus a pan/tilt of its own
+    /// (mostly pan) and a roll, so that translation does not turn the camera.
+    ///
+    /// # Panics
+    /// If `depth` is outside 0.4–4.5 m or a speed is not positive.
+    pub fn fast_handheld(
+        seed: u64,
+        depth: f64,
+        max_angular_speed: f64,
+        max_linear_speed: f64,
+    ) -> Self {
+        assert!(
+            (0.4..=4.5).contains(&depth),
+            "fast_handheld: depth {depth} m outside 0.4–4.5 m"
+        );
+        assert!(max_angular_speed > 0.0 && max_linear_speed > 0.0);
+        let mut rng = Rng::new(seed ^ 0xFA57_0000_0000_0002);
+        let f = fast_harmonic;
+        // Translation, unscaled (camera frame: along the view = world x).
+        let across = vec![f(&mut rng, 1.0, 1, 2), f(&mut rng, 0.5, 3, 5)];
+        let up = vec![f(&mut rng, 0.6, 1, 3), f(&mut rng, 0.3, 4, 6)];
+        let along = vec![f(&mut rng, 0.12 * depth.min(1.0), 1, 3)];
+        // Rotation, unscaled: pan (target offset across / depth ≈ angle), tilt, roll.
+        let pan = vec![f(&mut rng, 1.0, 1, 2), f(&mut rng, 0.4, 3, 5)];
+        let tilt = vec![f(&mut rng, 0.45, 1, 3), f(&mut rng, 0.2, 4, 6)];
+        let roll = vec![f(&mut rng, 0.3, 1, 3), f(&mut rng, 0.1, 4, 6)];
+
+        let build = |st: f64, sr: f64| {
+            let eye = [scaled(&along, st), scaled(&across, st), scaled(&up, st)];
+            // The target follows the camera's translation, plus the pan and tilt.
+            let mut target = eye.clone();
+            target[1].extend(scaled(&pan, sr * depth));
+            target[2].extend(scaled(&tilt, sr * depth));
+            Self {
+                orbit_centre: Point3::new(3.0 - depth, FAST_Y_M, 0.0),
+                radius_x: 0.0,
+                radius_y: 0.0,
+                angle0: 0.0,
+                angular_rate: 0.0,
+                angle_wobble: Vec::new(),
+                height: FAST_HEIGHT_M,
+                position_wobble: eye,
+                target: Point3::new(3.0, FAST_Y_M, FAST_HEIGHT_M),
+                target_wobble: target,
+                roll: scaled(&roll, sr),
+            }
+        };
+        let dt = 1.0 / 30.0;
+        // Linear speed depends on the translation scale only (and linearly).
+        let st = max_linear_speed / peak_speeds(&build(1.0, 0.0), dt).0;
+        // Angular speed grows with the rotation scale: bisect for it.
+        let (mut lo, mut hi) = (0.0, 1.0);
+        while peak_speeds(&build(st, hi), dt).1 < max_angular_speed {
+            hi *= 2.0;
+        }
+        for _ in 0..30 {
+            let mid = 0.5 * (lo + hi);
+            if peak_speeds(&build(st, mid), dt).1 < max_angular_speed {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        build(st, 0.5 * (lo + hi))
+    }
+}

@@ -261,6 +261,20 @@ impl Texture {
         }
     }
 
+    /// The same texture stretched by `scale` (every wavelength and noise cell times
+    /// `scale`): `scaled(s).eval(s u, s v) = eval(u, v)`.
+    pub fn scaled(&self, scale: f64) -> Self {
+        let mut t = self.clone();
+        for w in &mut t.waves {
+            w[0] /= scale;
+            w[1] /= scale;
+        }
+        for o in &mut t.octaves {
+            o.0 /= scale;
+        }
+        t
+    }
+
     /// Intensity (0–255, not rounded) at surface coordinates `(u, v)` in metres.
     #[inline]
     pub fn eval(&self, u: f64, v: f64) -> f64 {
@@ -366,6 +380,17 @@ impl Scene {
             SceneBox::new(Point3::new(0.1, -0.1, 2.1), v(0.30, 0.20, 0.12), 0.4),
         ];
         Self::new(room_min, room_max, boxes, seed)
+    }
+
+    /// Stretches the texture of one surface by `scale` (see [`Texture::scaled`]);
+    /// e.g. `scale` proportional to the viewing distance keeps its detail in pixels.
+    ///
+    /// # Panics
+    /// If `surface` is not a surface id of this scene or `scale` is not positive.
+    pub fn scale_texture(&mut self, surface: u32, scale: f64) {
+        assert!(scale > 0.0 && scale.is_finite(), "texture scale {scale}");
+        let t = &mut self.textures[surface as usize];
+        *t = t.scaled(scale);
     }
 
     /// Lower corner of the room.

@@ -1,0 +1,128 @@
+//! `ecvo synth --motion slow|fast`: slow is byte for byte the stream in `testdata/`,
+//! fast writes the poses of `SynthSequence::fast_handheld_320x180`, and the motion flags
+//! are checked.
+
+mod common;
+
+use std::path::Path;
+
+use common::{data_lines, run, run_ok, temp_dir, testdata_stream};
+use ecvo_synth::SynthSequence;
+
+/// Every file under `dir`, relative path and contents, sorted by path.
+fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let p = entry.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let rel = p.strip_prefix(dir).unwrap().display().to_string();
+                out.push((rel, std::fs::read(&p).unwrap()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn slow_motion_reproduces_testdata_byte_for_byte() {
+    let expected: Vec<_> = files(&testdata_stream())
+        .into_iter()
+        .filter(|(name, _)| name != "README.md")
+        .collect();
+    assert!(
+        expected.len() > 100,
+        "testdata stream has {} files",
+        expected.len()
+    );
+    for (name, extra) in [("default", &[][..]), ("slow", &["--motion", "slow"][..])] {
+        let out = temp_dir(&format!("synth-{name}")).join("seq");
+        let mut args = vec!["synth", "--out", out.to_str().unwrap(), "--frames", "60"];
+        args.extend_from_slice(extra);
+        run_ok(&args);
+        let got = files(&out);
+        assert_eq!(got.len(), expected.len(), "{name}: file count");
+        for ((gn, gb), (en, eb)) in got.iter().zip(&expected) {
+            assert_eq!(gn, en);
+            assert!(gb == eb, "{name}: {gn} differs from testdata");
+        }
+    }
+}
+
+#[test]
+fn fast_motion_writes_the_fast_path() {
+    let out = temp_dir("synth-fast").join("seq");
+    let stdout = run_ok(&[
+        "synth",
+        "--out",
+        out.to_str().unwrap(),
+        "--frames",
+        "20",
+        "--seed",
+        "3",
+        "--noise",
+        "kinect",
+        "--motion",
+        "fast",
+        "--depth",
+        "1.5",
+        "--max-rot-speed",
+        "60",
+        "--max-speed",
+        "0.8",
+    ])
+    .stdout;
+    assert!(String::from_utf8_lossy(&stdout).contains("motion Fast"));
+    let seq = SynthSequence::fast_handheld_320x180(20, 3, 1.5, 60f64.to_radians(), 0.8);
+    let gt = data_lines(&out.join("groundtruth.txt"));
+    assert_eq!(gt.len(), 20);
+    for (i, line) in gt.iter().enumerate() {
+        let f: Vec<f64> = line
+            .split_whitespace()
+            .map(|x| x.parse().unwrap())
+            .collect();
+        let t = seq.pose(i).translation.vector;
+        let d = ((f[1] - t.x).powi(2) + (f[2] - t.y).powi(2) + (f[3] - t.z).powi(2)).sqrt();
+        assert!(d < 1e-6, "frame {i}: {d} m from the fast path");
+    }
+    // Frames are about 1.5 m from the wall: the camera stands at x = 3 - 1.5.
+    let x0: f64 = gt[0].split_whitespace().nth(1).unwrap().parse().unwrap();
+    assert!((x0 - 1.5).abs() < 0.3, "x {x0}");
+    assert_eq!(data_lines(&out.join("depth.txt")).len(), 20);
+}
+
+#[test]
+fn motion_flags_are_checked() {
+    let dir = temp_dir("synth-flags");
+    let out = dir.join("seq");
+    let o = out.to_str().unwrap();
+    for (args, message) in [
+        (vec!["--depth", "2"], "--depth needs --motion fast"),
+        (vec!["--max-speed", "1"], "--max-speed needs --motion fast"),
+        (
+            vec!["--motion", "fast", "--depth", "0.2"],
+            "--depth must be",
+        ),
+        (vec!["--motion", "fast", "--depth", "9"], "--depth must be"),
+        (
+            vec!["--motion", "fast", "--max-rot-speed", "0"],
+            "--max-rot-speed must be",
+        ),
+        (
+            vec!["--motion", "fast", "--max-speed", "0"],
+            "--max-speed must be",
+        ),
+    ] {
+        let mut all = vec!["synth", "--out", o, "--frames", "2"];
+        all.extend_from_slice(&args);
+        let r = run(&all);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success(), "{args:?} succeeded");
+        assert!(err.contains(message), "{args:?}: {err}");
+        assert!(!out.join("rgb.txt").exists(), "{args:?} wrote a stream");
+    }
+}

@@ -1,0 +1,307 @@
+#!/usr/bin/env python3
+"""Frame-to-frame peers for ecvo, scored with `ecvo eval`.
+
+Runs, on TUM-layout sequence folders (rgb.txt, depth.txt, rgb/, depth/, camera.json,
+groundtruth.txt), at several frame steps:
+
+* opencv-rgbd / opencv-rgb / opencv-depth: OpenCV's RGB-D odometry (cv2.Odometry in
+  OpenCV 5, cv2.rgbd.*Odometry_create in OpenCV 4.x contrib) with its default settings,
+  naively frame to frame: every frame is aligned to the previous one starting from the
+  identity (compute(current, previous), as OpenCV's odometry evaluation sample does; the
+  other direction measured worse here: fr1/desk half 0.121 / 0.143 m instead of
+  0.101 / 0.061 m for RGB-D / RGB), and the poses are composed. A failed alignment keeps the previous pose
+  (counted in `failed`).
+* vors: the visual-odometry-rs tracker (DSO-style direct tracking against keyframes)
+  through scripts/peers/vors-cam, a driver that takes the camera from camera.json.
+
+Colour and depth are paired by nearest timestamp within 0.02 s (greedy, closest pairs
+first, each image used once), as TUM's associate.py does; `--frame-steps N` keeps every
+Nth associated pair. Each run writes a TUM trajectory, is scored with
+`ecvo eval GT EST --json`, and is timed per frame: the median of the per-frame cost of
+the odometry (OpenCV: making the OdometryFrame from the decoded images, including the
+conversion of depth to metres, prepareFrame and compute; vors: Tracker::track), as CPU
+time on one thread (OpenCV is set to one thread; vors is single-threaded), which a
+loaded machine does not inflate; the wall-clock median is in the JSON too. Reading and
+decoding the PNGs is not counted for either.
+
+Usage: peers.py --ecvo BIN [--vors-cam BIN] [--peers a,b] [--frame-steps 1,2]
+                --out DIR SEQ...
+Prints a Markdown table and writes DIR/peers.json.
+"""
+
+import argparse
+import bisect
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+import numpy as np
+import cv2
+
+MAX_DT = 0.02
+
+# One thread, as ecvo's ms_per_frame.total is measured.
+cv2.setNumThreads(1)
+
+
+def read_list(path):
+    """(stamp, relative path) pairs of a TUM rgb.txt / depth.txt, '#' lines skipped."""
+    out = []
+    with open(path) as f:
+        for line in f:
+            line = line.strip()
+            if not line or line.startswith("#"):
+                continue
+            parts = line.split()
+            out.append((float(parts[0]), parts[1]))
+    return out
+
+
+def associate(rgb, depth, max_dt=MAX_DT):
+    """Pairs (rgb, depth) entries whose stamps differ by less than max_dt: closest
+    pairs first, each entry used at most once; result sorted by colour stamp."""
+    dstamps = [d[0] for d in depth]
+    cands = []
+    for i, (t, _) in enumerate(rgb):
+        lo = bisect.bisect_left(dstamps, t - max_dt)
+        hi = bisect.bisect_right(dstamps, t + max_dt)
+        for j in range(lo, hi):
+            dt = abs(dstamps[j] - t)
+            if dt < max_dt:
+                cands.append((dt, i, j))
+    cands.sort()
+    used_r, used_d, pairs = set(), set(), []
+    for _, i, j in cands:
+        if i in used_r or j in used_d:
+            continue
+        used_r.add(i)
+        used_d.add(j)
+        pairs.append((rgb[i], depth[j]))
+    pairs.sort(key=lambda p: p[0][0])
+    return pairs
+
+
+def load_sequence(seq):
+    with open(os.path.join(seq, "camera.json")) as f:
+        cam = json.load(f)
+    rgb = sorted(read_list(os.path.join(seq, "rgb.txt")))
+    depth = sorted(read_list(os.path.join(seq, "depth.txt")))
+    return cam, associate(rgb, depth)
+
+
+def read_gray(path):
+    img = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+    if img is None:
+        raise RuntimeError(f"cannot read {path}")
+    if img.ndim == 3:
+        code = cv2.COLOR_BGRA2GRAY if img.shape[2] == 4 else cv2.COLOR_BGR2GRAY
+        img = cv2.cvtColor(img, code)
+    if img.dtype != np.uint8:
+        raise RuntimeError(f"{path}: 8-bit colour expected, got {img.dtype}")
+    return img
+
+
+def read_depth(path):
+    d = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+    if d is None or d.dtype != np.uint16 or d.ndim != 2:
+        raise RuntimeError(f"{path}: 16-bit depth expected")
+    return d
+
+
+def quat_from_matrix(r):
+    """(qx, qy, qz, qw) of a rotation matrix (Shepperd's method)."""
+    t = np.trace(r)
+    if t > 0:
+        s = 2.0 * np.sqrt(t + 1.0)
+        return ((r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s,
+                (r[1, 0] - r[0, 1]) / s, 0.25 * s)
+    i = int(np.argmax(np.diag(r)))
+    j, k = (i + 1) % 3, (i + 2) % 3
+    s = 2.0 * np.sqrt(1.0 + r[i, i] - r[j, j] - r[k, k])
+    q = [0.0, 0.0, 0.0, 0.0]
+    q[i] = 0.25 * s
+    q[j] = (r[j, i] + r[i, j]) / s
+    q[k] = (r[k, i] + r[i, k]) / s
+    q[3] = (r[k, j] - r[j, k]) / s
+    return tuple(q)
+
+
+def write_tum(path, stamps, poses):
+    with open(path, "w") as f:
+        f.write("# timestamp tx ty tz qx qy qz qw\n")
+        for t, p in zip(stamps, poses):
+            q = quat_from_matrix(p[:3, :3])
+            x, y, z = p[:3, 3]
+            f.write(f"{t:.6f} {x:.9f} {y:.9f} {z:.9f} "
+                    f"{q[0]:.9f} {q[1]:.9f} {q[2]:.9f} {q[3]:.9f}\n")
+
+
+class OpenCvOdometry:
+    """OpenCV's odometry in one of its modes, behind one interface for 5.x and 4.x."""
+
+    def __init__(self, mode, cam):
+        self.mode = mode
+        self.k = np.array([[cam["fx"], 0, cam["cx"]], [0, cam["fy"], cam["cy"]],
+                           [0, 0, 1]], dtype=np.float64)
+        self.scale = float(cam["depth_scale"])
+        if hasattr(cv2, "Odometry") and hasattr(cv2, "OdometrySettings"):
+            self.api = "cv2.Odometry (OpenCV 5)"
+            settings = cv2.OdometrySettings()
+            settings.setCameraMatrix(self.k.astype(np.float32))
+            otype = {"rgbd": cv2.OdometryType_RGB_DEPTH, "rgb": cv2.OdometryType_RGB,
+                     "depth": cv2.OdometryType_DEPTH}[mode]
+            self.odo = cv2.Odometry(otype, settings, cv2.OdometryAlgoType_COMMON)
+        elif hasattr(cv2, "rgbd"):
+            self.api = "cv2.rgbd (OpenCV 4 contrib)"
+            make = {"rgbd": cv2.rgbd.RgbdICPOdometry_create,
+                    "rgb": cv2.rgbd.RgbdOdometry_create,
+                    "depth": cv2.rgbd.ICPOdometry_create}[mode]
+            self.odo = make(self.k)
+        else:
+            raise RuntimeError("this OpenCV has neither cv2.Odometry nor cv2.rgbd")
+
+    def frame(self, gray, depth_raw):
+        """A prepared frame from decoded images (timed by the caller)."""
+        depth = depth_raw.astype(np.float32) * np.float32(1.0 / self.scale)
+        if self.api.startswith("cv2.Odometry"):
+            f = cv2.OdometryFrame(depth=depth, image=gray)
+            self.odo.prepareFrame(f)
+            return f
+        f = cv2.rgbd.OdometryFrame_create(gray, depth, (depth > 0).astype(np.uint8))
+        self.odo.prepareFrameCache(f, cv2.rgbd.OdometryFrame_CACHE_ALL)
+        return f
+
+    def compute(self, src, dst):
+        """(ok, Rt) with Rt mapping points of src's camera frame into dst's."""
+        if self.api.startswith("cv2.Odometry"):
+            ok, rt = self.odo.compute(src, dst)
+        else:
+            ok, rt = self.odo.compute2(src, dst)
+        return bool(ok), np.asarray(rt, dtype=np.float64)
+
+
+def run_opencv(mode, seq, cam, pairs, out_path):
+    odo = OpenCvOdometry(mode, cam)
+    pose = np.eye(4)
+    stamps, poses, ms, wall, failed = [], [], [], [], 0
+    prev = None
+    for (t, rgb_rel), (_, depth_rel) in pairs:
+        gray = read_gray(os.path.join(seq, rgb_rel))
+        depth = read_depth(os.path.join(seq, depth_rel))
+        start, cpu = time.perf_counter(), time.thread_time()
+        cur = odo.frame(gray, depth)
+        if prev is not None:
+            # As OpenCV's own odometry evaluation sample does: the current frame is the
+            # source, the previous one the destination.
+            ok, rt = odo.compute(cur, prev)
+        ms.append((time.thread_time() - cpu) * 1e3)
+        wall.append((time.perf_counter() - start) * 1e3)
+        if prev is not None:
+            if ok and np.all(np.isfinite(rt)):
+                # Rt * p_cur = p_prev: Rt is the current camera's pose in the previous
+                # camera's frame.
+                pose = pose @ rt
+            else:
+                failed += 1
+        prev = cur
+        stamps.append(t)
+        poses.append(pose.copy())
+    write_tum(out_path, stamps, poses)
+    # The first frame is only prepared; its cost is part of every later frame's.
+    return {"ms": ms[1:], "wall_ms": wall[1:], "failed": failed, "api": odo.api}
+
+
+def run_vors(vors_cam, seq, pairs, out_path, work):
+    assoc = os.path.join(work, "vors-associations.txt")
+    with open(assoc, "w") as f:
+        # vors_track's format: depth first.
+        for (t_rgb, rgb_rel), (t_d, depth_rel) in pairs:
+            f.write(f"{t_d:.6f} {os.path.abspath(os.path.join(seq, depth_rel))} "
+                    f"{t_rgb:.6f} {os.path.abspath(os.path.join(seq, rgb_rel))}\n")
+    r = subprocess.run([vors_cam, os.path.join(seq, "camera.json"), assoc],
+                       capture_output=True, text=True)
+    if r.returncode != 0:
+        raise RuntimeError(f"vors-cam failed: {r.stderr[-2000:]}")
+    with open(out_path, "w") as f:
+        f.write("# timestamp tx ty tz qx qy qz qw (vors, depth stamps)\n")
+        f.write(r.stdout)
+    timed = [line.split() for line in r.stderr.splitlines()
+             if line.startswith("vors-cam-ms ")]
+    ms = [float(x[2]) for x in timed]
+    wall = [float(x[3]) for x in timed]
+    failed = sum(1 for line in r.stderr.splitlines()
+                 if line and not line.startswith(("vors-cam", "Optical_flow",
+                                                  "Changing keyframe")))
+    keyframes = sum(1 for line in r.stderr.splitlines()
+                    if line.startswith("Changing keyframe"))
+    return {"ms": ms, "wall_ms": wall, "failed": failed, "keyframes": keyframes}
+
+
+def evaluate(ecvo, gt, est):
+    r = subprocess.run([ecvo, "eval", gt, est, "--json"], capture_output=True, text=True)
+    if r.returncode != 0:
+        raise RuntimeError(f"ecvo eval failed: {r.stderr.strip()}")
+    return json.loads(r.stdout)["ate_rmse_m"]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("seqs", nargs="+", metavar="SEQ")
+    ap.add_argument("--ecvo", required=True)
+    ap.add_argument("--vors-cam")
+    ap.add_argument("--peers", default="opencv-rgbd,opencv-rgb,vors")
+    ap.add_argument("--frame-steps", default="1")
+    ap.add_argument("--out", required=True)
+    a = ap.parse_args()
+    steps = [int(s) for s in a.frame_steps.split(",")]
+    peers = a.peers.split(",")
+    for p in peers:
+        if p not in ("opencv-rgbd", "opencv-rgb", "opencv-depth", "vors"):
+            ap.error(f"unknown peer {p}")
+    if "vors" in peers and not a.vors_cam:
+        ap.error("the vors peer needs --vors-cam")
+    os.makedirs(a.out, exist_ok=True)
+    rows = []
+    print("| sequence | frame step | peer | frames | ATE RMSE (m) | CPU ms/frame (median) "
+          "| failed |")
+    print("|---|---|---|---|---|---|---|")
+    for seq in a.seqs:
+        seq = seq.rstrip("/")
+        name = os.path.basename(seq)
+        cam, pairs = load_sequence(seq)
+        gt = os.path.join(seq, "groundtruth.txt")
+        for step in steps:
+            sel = pairs[::step]
+            work = os.path.join(a.out, name, f"step{step}")
+            os.makedirs(work, exist_ok=True)
+            for peer in peers:
+                est = os.path.join(work, f"{peer}.txt")
+                if peer == "vors":
+                    info = run_vors(a.vors_cam, seq, sel, est, work)
+                else:
+                    info = run_opencv(peer.split("-")[1], seq, cam, sel, est)
+                ate = evaluate(a.ecvo, gt, est)
+                ms = statistics.median(info["ms"]) if info["ms"] else float("nan")
+                row = {"sequence": name, "path": seq, "frame_step": step, "peer": peer,
+                       "frames": len(sel), "ate_rmse_m": ate, "ms_per_frame_median": ms,
+                       "wall_ms_per_frame_median": statistics.median(info["wall_ms"])
+                       if info["wall_ms"] else float("nan"),
+                       "failed": info["failed"], "trajectory": est}
+                for k in ("api", "keyframes"):
+                    if k in info:
+                        row[k] = info[k]
+                rows.append(row)
+                print(f"| {name} | {step} | {peer} | {len(sel)} | {ate:.4f} | {ms:.2f} | "
+                      f"{info['failed']} |", flush=True)
+    meta = {"opencv": cv2.__version__, "numpy": np.__version__,
+            "association_max_dt_s": MAX_DT, "rows": rows}
+    with open(os.path.join(a.out, "peers.json"), "w") as f:
+        json.dump(meta, f, indent=2)
+    print(f"\nwrote {os.path.join(a.out, 'peers.json')}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# Runs ecvo's frame-to-frame peers on TUM-layout sequences and scores them with
+# `ecvo eval`: OpenCV's RGB-D and photometric (RGB) odometry from PyPI's
+# opencv-contrib-python, and the visual-odometry-rs (vors) tracker from crates.io.
+#
+#   scripts/peers/run-peers.sh SEQ... [--frame-steps 1,2,3,4] [--out DIR]
+#                              [--peers opencv-rgbd,opencv-rgb,vors]
+#
+# Prints a Markdown table (sequence, frame step, peer, frames, ATE RMSE, median CPU
+# ms/frame, failed alignments) and writes DIR/peers.json (default DIR:
+# target/peers). Peers: opencv-rgbd, opencv-rgb, opencv-depth, vors.
+#
+# First use sets up, all outside the repository's sources:
+#   - a Python venv with opencv-contrib-python and numpy in PEERS_VENV
+#     (default target/peers-venv);
+#   - scripts/peers/vors-cam (a driver of the visual-odometry-rs crate that takes
+#     camera.json's intrinsics and depth scale) built into PEERS_CACHE/vors-cam-target
+#     (default ~/.cache/ecvo-peers), about 3-4 minutes here;
+#   - target/release/ecvo, if missing (ECVO overrides the binary).
+set -euo pipefail
+
+root=$(cd "$(dirname "$0")/../.." && pwd)
+venv=${PEERS_VENV:-$root/target/peers-venv}
+cache=${PEERS_CACHE:-$HOME/.cache/ecvo-peers}
+ecvo=${ECVO:-$root/target/release/ecvo}
+out=$root/target/peers
+steps=1
+peers=opencv-rgbd,opencv-rgb,vors
+seqs=()
+while [[ $# -gt 0 ]]; do
+    case $1 in
+        --frame-steps) steps=$2; shift 2 ;;
+        --out) out=$2; shift 2 ;;
+        --peers) peers=$2; shift 2 ;;
+        -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
+        -*) echo "unknown option $1" >&2; exit 2 ;;
+        *) seqs+=("$1"); shift ;;
+    esac
+done
+if [[ ${#seqs[@]} -eq 0 ]]; then
+    echo "usage: $0 SEQ... [--frame-steps 1,2,3,4] [--out DIR] [--peers LIST]" >&2
+    exit 2
+fi
+
+if [[ ! -x $venv/bin/python ]] || ! "$venv/bin/python" -c 'import cv2, numpy' 2>/dev/null; then
+    echo "setting up $venv (opencv-contrib-python, numpy)" >&2
+    python3 -m venv "$venv"
+    "$venv/bin/pip" install --quiet opencv-contrib-python numpy >&2
+fi
+
+if [[ ! -x $ecvo ]]; then
+    (cd "$root" && cargo build --release -p ecvo-cli >&2)
+fi
+
+args=()
+if [[ ,$peers, == *,vors,* ]]; then
+    vors=$cache/vors-cam-target/release/vors-cam
+    # Rebuilds when the driver's sources changed (cargo decides; quick when they did not).
+    (cd "$root/scripts/peers/vors-cam" &&
+        cargo build --release --locked --quiet --target-dir "$cache/vors-cam-target" >&2)
+    args+=(--vors-cam "$vors")
+fi
+
+exec "$venv/bin/python" "$root/scripts/peers/peers.py" --ecvo "$ecvo" --peers "$peers" \
+    --frame-steps "$steps" --out "$out" "${args[@]}" "${seqs[@]}"
