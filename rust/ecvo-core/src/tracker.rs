@@ -291,7 +291,10 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             if f2f.start > 0 {
                 self.counters.predicted_starts += 1;
             }
-            self.velocity = Some(Velocity {
+            // A velocity only from consecutive frames: after a lost frame, [A] spans
+            // the gap and the next prediction starts afresh from the identity (which is
+            // also what the pipeline's filter stage can know without the tracker).
+            self.velocity = (prev.index + 1 == index).then(|| Velocity {
                 index,
                 motion: f2f.pose,
                 dt: frame.timestamp - prev.frame.timestamp,

@@ -1028,7 +1028,9 @@ fn filter_stage(s: &Shared, mut preparer: Preparer, config: &Config, compute: &r
             let ahead = match (&r, &last) {
                 (Ok(()), Some(prev)) => {
                     let published = *lock(&s.velocity);
-                    let known = chain.prior(config, prev, prepared.timestamp, behind, published);
+                    let offline = s.admission == Admission::Offline;
+                    let known =
+                        chain.prior(config, prev, prepared.timestamp, behind, offline, published);
                     known.map(|prior| Ahead {
                         against: prev.sequence(),
                         prior,
@@ -1100,17 +1102,20 @@ struct Chain {
 
 impl Chain {
     /// Whether to compute [A] ahead for a frame stamped `timestamp` registered
-    /// against `prev`, and with which prior (`Some(prior)`), or not (`None`): when the
-    /// tracker is `behind` and the prior is known from this stage's own chain, or
-    /// whatever the tracker's load when the tracker has just `published` its
-    /// velocity after `prev` (it is idle: the chain restarts at no cost in latency,
-    /// the work moving from one waiting stage to the other).
+    /// against `prev`, and with which prior (`Some(prior)`), or not (`None`). Without
+    /// the constant-velocity prior: whenever the tracker is `behind`. With it, only
+    /// when the prior is known: `prev` is the first frame, or this stage computed
+    /// `prev`'s [A] itself (its chain, which it then keeps going whatever the
+    /// tracker's load when `offline`; live, where latency counts, only while the
+    /// tracker is behind), or the tracker has just `published` its velocity after
+    /// `prev` (it is idle, so the chain restarts at no cost in latency).
     fn prior(
         &self,
         config: &Config,
         prev: &PooledFrame,
         timestamp: f64,
         behind: bool,
+        offline: bool,
         published: Option<(u64, Option<(Pose, f64)>)>,
     ) -> Option<Option<Pose>> {
         let (seq, prev_stamp, own) = self.last?;
@@ -1118,13 +1123,19 @@ impl Chain {
             return None;
         }
         let from_tracker = published.filter(|(s, _)| *s == seq).map(|(_, v)| v);
-        if !behind && from_tracker.is_none() {
+        if config.motion.prior != MotionPrior::ConstantVelocity {
+            // No prior to know: help whenever the tracker is behind.
+            return behind.then_some(None);
+        }
+        // With the prior, a chain this stage stops cannot restart until the tracker is
+        // idle, so once it runs it runs whatever the queue: the tracker then does the
+        // corrections only.
+        let first = self.prepared == 1;
+        let keep_going = offline && (first || own.is_some());
+        if !(behind || keep_going || from_tracker.is_some()) {
             return None;
         }
-        if config.motion.prior != MotionPrior::ConstantVelocity {
-            return Some(None);
-        }
-        let a = if self.prepared == 1 {
+        let a = if first {
             // `prev` is the first frame: the tracker anchors on it, with no velocity.
             None
         } else {
