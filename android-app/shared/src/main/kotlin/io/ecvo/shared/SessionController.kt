@@ -24,6 +24,9 @@ class SourceCallbacks internal constructor(private val controller: SessionContro
     /** The source failed (any thread): stops it and shows [message]. */
     fun failed(message: String) = controller.onSourceFailed(token, message)
 
+    /** Something the user should know that does not stop the source (any thread). */
+    fun notice(message: String) = controller.onSourceNotice(token, message)
+
     /** The source ended normally (end of a replay; any thread). */
     fun finished() = controller.onSourceFinished(token)
 
@@ -125,6 +128,10 @@ class SessionController(
     }
 
     internal fun onSourceFailed(t: Long, message: String) = post { fail(t, message) }
+
+    internal fun onSourceNotice(t: Long, message: String) = post {
+        if (isCurrent(t)) presenter.onNotice(message)
+    }
 
     internal fun onSourceFinished(t: Long) = post {
         if (isCurrent(t)) stopSource()

@@ -75,3 +75,21 @@ class ExportAndSettingsTest {
         assertEquals(emptyList<RecordingEntry>(), Recordings.list(File(root, "missing")))
     }
 }
+
+class PreviewTest {
+    @Test
+    fun previewShowsNearBrightFarDarkAndHolesApart() {
+        val px = PreviewImage.depth(shortArrayOf(300, 4000, 0, 2150))
+        assertEquals(0xFFFFFFFF.toInt(), px[0])
+        assertEquals(0xFF000000.toInt(), px[1])
+        assertEquals(PreviewImage.NO_DEPTH, px[2])
+        assertEquals(0x80, px[3] and 0xFF) // half way: 255 - 127
+        assertEquals(0xFF808080.toInt(), PreviewImage.intensity(byteArrayOf(0x80.toByte()))[0])
+        val f = LatestFrame()
+        assertEquals(null, f.takePreview(PreviewKind.DEPTH))
+        f.put(shortArrayOf(300), byteArrayOf(1))
+        assertEquals(null, f.takePreview(PreviewKind.NONE))
+        assertEquals(0xFF010101.toInt(), f.takePreview(PreviewKind.INTENSITY)!![0])
+        assertEquals(null, f.takePreview(PreviewKind.INTENSITY)) // nothing new since
+    }
+}
