@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Checks :app without the Android SDK, in two steps that fail on any error:
+# Checks :app without the Android SDK, in steps that fail on any error:
+#   0. the stub generator's unit tests (test_gen_stubs.py);
 #   1. resources: aapt (Debian's, Android 10) compiles the manifest and res/ against
 #      Debian's android-framework-res and writes R.java;
 #   2. Kotlin: Java stubs of the Android classes :app uses are generated from the npm
@@ -34,6 +35,10 @@ if ! command -v aapt >/dev/null || [ ! -f "$FRAMEWORK" ]; then
     || { apt-get update >&2 && apt-get install -y --no-install-recommends aapt android-framework-res >&2; }
 fi
 command -v javac >/dev/null || die "javac (JDK 17) is needed"
+
+# --- 0. the generator's own tests ---------------------------------------------------------
+log "gen_stubs.py unit tests"
+(cd "$HERE" && python3 -m unittest -q test_gen_stubs) >&2 || die "gen_stubs.py tests failed"
 
 rm -rf "$OUT"; mkdir -p "$OUT/res-check" "$OUT/gen" "$OUT/stubs-src" "$OUT/stubs-classes"
 
@@ -78,16 +83,17 @@ javac -nowarn -encoding UTF-8 -source 17 -target 17 -d "$OUT/stubs-classes" @"$O
 (cd "$OUT/stubs-classes" && jar cf "$OUT/android-stubs.jar" .)
 
 # :tracker and :shared, compiled by the JVM test script (no tests run).
-bash "$REPO/scripts/kotlin/test-kotlin.sh" --compile-only --out "$OUT/kotlin" >&2
+KOUT="$REPO/target/kotlin" # the JVM test step's build: up to date when it ran first
+bash "$REPO/scripts/kotlin/test-kotlin.sh" --compile-only --out "$KOUT" >&2
 KOTLINC="${KOTLINC:-${KOTLINC_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/ecvo/kotlinc}/node_modules/kotlin-compiler/bin/kotlinc}"
 [ -x "$KOTLINC" ] || die "no kotlinc at $KOTLINC"
 log "kotlinc: :app against the stubs"
 set +e
-"$KOTLINC" -jvm-target 17 -no-reflect -Werror -cp "$OUT/android-stubs.jar:$OUT/kotlin/tracker.jar:$OUT/kotlin/shared.jar" \
+"$KOTLINC" -jvm-target 17 -no-reflect -Werror -cp "$OUT/android-stubs.jar:$KOUT/tracker.jar:$KOUT/shared.jar" \
   -d "$OUT/app-classes" "$APP/kotlin" >"$OUT/kotlinc.log" 2>&1
 rc=$?
 set -e
 cat "$OUT/kotlinc.log" >&2
 [ "$rc" = 0 ] || die ":app's Kotlin does not compile against the Android API stubs"
 log "OK: resources and :app's Kotlin compile ($(find "$OUT/app-classes" -name '*.class' | wc -l) classes)"
-echo "android app check: 2 passed, 0 failed"
+echo "android app check: 3 passed, 0 failed"

@@ -629,7 +629,7 @@ def main(argv=None):
     ap.add_argument("--overrides")
     ap.add_argument("--classes", action="append", default=[])
     ap.add_argument("names", nargs="*")
-    a = ap.parse_args(argv)
+    a = ap.parse_intermixed_args(argv)
     roots = list(a.names)
     for cf in a.classes:
         with open(cf, encoding="utf-8") as f:

@@ -196,7 +196,10 @@ class MainActivity : Activity() {
         SessionHolder.camera = null
         SessionHolder.resumeLive = false
         trajectoryView.clear()
-        controller.start(FrameSource.REPLAY, trackerConfig(reader.camera, FrameSource.REPLAY)) { cb -> ReplaySource(reader, cb).start() }
+        SessionHolder.previewSize = reader.camera.width to reader.camera.height
+        controller.start(FrameSource.REPLAY, trackerConfig(reader.camera, FrameSource.REPLAY)) { cb ->
+            ReplaySource(reader, cb) { d, g -> if (settings.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g) }.start()
+        }
         render()
     }
 

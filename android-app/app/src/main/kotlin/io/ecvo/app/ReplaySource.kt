@@ -10,7 +10,12 @@ import io.ecvo.shared.StreamReader
  * is drawn as it was taken. The tracker runs offline (never drops), so every frame is
  * tracked. [stop] interrupts the thread; a frame in flight is ignored by the controller.
  */
-class ReplaySource(private val reader: StreamReader, private val callbacks: SourceCallbacks) : SourceHandle {
+class ReplaySource(
+    private val reader: StreamReader,
+    private val callbacks: SourceCallbacks,
+    /** Called with each frame handed to the tracker (for the preview). */
+    private val onFrame: (ShortArray, ByteArray) -> Unit = { _, _ -> },
+) : SourceHandle {
     private val thread = Thread({ run() }, "ecvo-replay")
 
     fun start(): ReplaySource = also { thread.start() }
@@ -23,6 +28,7 @@ class ReplaySource(private val reader: StreamReader, private val callbacks: Sour
                 if (Thread.currentThread().isInterrupted || !callbacks.isCurrent) return
                 val wait = (frame.timestampNs - first) - (SystemClock.elapsedRealtimeNanos() - t0)
                 if (wait > 0) Thread.sleep(wait / 1_000_000, (wait % 1_000_000).toInt())
+                onFrame(frame.depth, frame.intensity)
                 callbacks.frame(frame.timestampNs, frame.depth, frame.intensity)
             }
             callbacks.finished()
