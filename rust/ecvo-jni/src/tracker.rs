@@ -10,6 +10,8 @@ use jni::sys::{jint, jlong};
 use crate::config::InitArgs;
 use crate::depth16::Depth16Decoder;
 use crate::error::Failure;
+#[cfg(feature = "test-hooks")]
+use crate::layout::TEST_PANIC_TIMESTAMP_NS;
 use crate::layout::{DepthFormat, ns_to_seconds};
 
 /// One tracker behind a handle.

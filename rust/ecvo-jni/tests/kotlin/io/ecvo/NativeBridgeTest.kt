@@ -348,7 +348,7 @@ class NativeBridgeTest {
     }
 
     @Test fun staleAndBogusHandles() {
-        val h = NativeBridge.nativeInit(320, 180, 250.0, 250.0, 159.5, 89.5, 0, 1000.0, 0, 1, 2, true, 1)
+        val h = NativeBridge.nativeInit(320, 180, 250.0, 250.0, 159.5, 89.5, 0, 1000.0, 0, 1, 2, true, 1, false)
         NativeBridge.nativeRelease(h)
         NativeBridge.nativeRelease(h) // unknown handle: nothing
         NativeBridge.nativeRelease(0)
@@ -415,7 +415,7 @@ class NativeBridgeTest {
     @Test fun releaseRacingWithCallsOnOtherThreads() {
         // Bypasses Tracker's lock on purpose: the native side must cope on its own.
         repeat(5) {
-            val h = NativeBridge.nativeInit(320, 180, 250.0, 250.0, 159.5, 89.5, 0, 1000.0, 0, 1, 2, true, 2)
+            val h = NativeBridge.nativeInit(320, 180, 250.0, 250.0, 159.5, 89.5, 0, 1000.0, 0, 1, 2, true, 2, false)
             val start = CountDownLatch(1)
             val unexpected = AtomicReference<Throwable?>(null)
             val callers = (0 until 3).map { k ->

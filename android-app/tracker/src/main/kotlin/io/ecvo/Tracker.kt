@@ -77,10 +77,13 @@ class Tracker(val config: TrackerConfig) : PoseTracker {
 
         override fun run() = lock.write {
             val h = value
-            value = 0L
             if (h != 0L) {
-                if (!closedExplicitly) LOG.warning("ecvo: a Tracker was garbage-collected without close(); released its native tracker $h")
-                NativeBridge.nativeRelease(h)
+                try {
+                    if (!closedExplicitly) LOG.warning("ecvo: a Tracker was garbage-collected without close(); releasing its native tracker $h")
+                    NativeBridge.nativeRelease(h)
+                } finally {
+                    value = 0L // after the release: 0 means released
+                }
             }
         }
     }

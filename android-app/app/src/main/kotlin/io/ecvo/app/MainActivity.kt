@@ -75,7 +75,8 @@ class MainActivity : Activity() {
         }
     }
 
-    private val cameraManager: CameraManager get() = getSystemService(CAMERA_SERVICE) as CameraManager
+    /** From the application context: the camera source outlives this activity (rotation). */
+    private val cameraManager: CameraManager get() = applicationContext.getSystemService(CAMERA_SERVICE) as CameraManager
     private val recordingsDir: File get() = File(getExternalFilesDir(null) ?: filesDir, "recordings")
 
     override fun onCreate(savedInstanceState: Bundle?) {
@@ -89,6 +90,7 @@ class MainActivity : Activity() {
         liveButton = findViewById(R.id.live)
         recordButton = findViewById(R.id.record)
         settings = loadSettings()
+        SessionHolder.preview = settings.preview
 
         findViewById<Button>(R.id.replay_sample).setOnClickListener { startReplay(AssetStreamFiles(assets)) }
         findViewById<Button>(R.id.recordings).setOnClickListener { showRecordings() }
@@ -198,7 +200,7 @@ class MainActivity : Activity() {
         trajectoryView.clear()
         SessionHolder.previewSize = reader.camera.width to reader.camera.height
         controller.start(FrameSource.REPLAY, trackerConfig(reader.camera, FrameSource.REPLAY)) { cb ->
-            ReplaySource(reader, cb) { d, g -> if (settings.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g) }.start()
+            ReplaySource(reader, cb) { d, g -> if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g) }.start()
         }
         render()
     }
@@ -240,7 +242,7 @@ class MainActivity : Activity() {
     private fun openCamera(setup: DepthCameraSource.Setup, cb: io.ecvo.shared.SourceCallbacks): DepthCameraSource {
         SessionHolder.previewSize = setup.frame.width to setup.frame.height
         val source = DepthCameraSource(cameraManager, setup, SessionHolder.frames, settings.confidence, cb) { d, g ->
-            if (settings.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g)
+            if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g)
         }
         SessionHolder.camera = source
         return source.start()
@@ -320,6 +322,7 @@ class MainActivity : Activity() {
 
     private fun saveSettings(s: AppSettings) {
         settings = s
+        SessionHolder.preview = s.preview
         val e = getSharedPreferences(PREFS, MODE_PRIVATE).edit()
         for ((k, v) in s.toMap()) e.putString(k, v)
         e.apply()

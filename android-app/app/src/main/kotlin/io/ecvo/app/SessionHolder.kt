@@ -23,6 +23,9 @@ object SessionHolder {
         SessionController(post = { block -> ui.post(block) }, nowNs = SystemClock::elapsedRealtimeNanos)
     }
 
+    /** What the preview shows (read on the source threads, so that they hold no activity). */
+    @Volatile var preview: io.ecvo.shared.PreviewKind = io.ecvo.shared.PreviewKind.NONE
+
     /** The latest frame, for the preview. */
     val latest = LatestFrame()
 
