@@ -65,19 +65,21 @@ kotlin {
     jvmToolchain(libs.versions.jvmTarget.get().toInt())
 }
 
+// No AndroidX: the app uses platform classes and themes only, so CI can compile its resources
+// (aapt) and Kotlin (against generated API stubs) without the SDK; see scripts/android-stubs.
 dependencies {
     implementation(project(":tracker"))
     implementation(project(":shared"))
-    implementation(libs.androidx.core.ktx)
-    implementation(libs.androidx.appcompat)
-    implementation(libs.androidx.activity.ktx)
 }
 
 /**
  * Builds libecvo_jni for every ABI into src/main/jniLibs with scripts/build-android.sh
- * (cargo-ndk; needs ANDROID_NDK_HOME, cargo-ndk and the rustup targets). Skip it with
+ * (cargo-ndk; needs cargo-ndk and the rustup targets). The NDK is the one AGP resolves for
+ * `ndkVersion` (installed by the SDK manager in a stock Android Studio), passed to the script
+ * as ANDROID_NDK_HOME; an ANDROID_NDK_HOME already set in the environment wins. Skip it with
  * -Pecvo.skipRustBuild=true to package libraries built beforehand.
  */
+val agpNdkDirectory = androidComponents.sdkComponents.ndkDirectory
 val skipRustBuild = providers.gradleProperty("ecvo.skipRustBuild").map { it.toBoolean() }.orElse(false)
 val buildRustLibraries by tasks.registering(Exec::class) {
     group = "build"
@@ -85,6 +87,11 @@ val buildRustLibraries by tasks.registering(Exec::class) {
     val root = rootProject.layout.projectDirectory
     onlyIf { !skipRustBuild.get() }
     workingDir = root.asFile
+    doFirst {
+        if (System.getenv("ANDROID_NDK_HOME").isNullOrBlank()) {
+            environment("ANDROID_NDK_HOME", agpNdkDirectory.get().asFile.absolutePath)
+        }
+    }
     commandLine(
         "bash", root.file("scripts/build-android.sh").asFile.path,
         "-P", libs.versions.minSdk.get(),

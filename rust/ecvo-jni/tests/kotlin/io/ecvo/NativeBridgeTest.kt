@@ -77,7 +77,7 @@ class NativeBridgeTest {
     private fun config(s: Stream? = null, admission: Admission = Admission.OFFLINE) = TrackerConfig(
         width = s?.width ?: 320, height = s?.height ?: 180,
         fx = s?.fx ?: 250.0, fy = s?.fy ?: 250.0, cx = s?.cx ?: 159.5, cy = s?.cy ?: 89.5,
-        preset = Preset.PHONE, mode = Mode.L2, admission = admission, threads = 2,
+        preset = Preset.PHONE, mode = Mode.L2, admission = admission, threads = 2, pointCloud = true,
     )
 
     private val pixels = 320 * 180
@@ -158,6 +158,92 @@ class NativeBridgeTest {
         }
     }
 
+    // --- incremental reads, strided planes, automatic confidence, the Cleaner ------------
+
+    @Test
+    fun trajectorySinceReturnsOnlyTheNewPoses() {
+        val s = stream()
+        Tracker(config(s)).use { t ->
+            assertEquals(0, t.trajectorySince(0).size)
+            val seen = ArrayList<TimedPose>()
+            for (i in s.stamps.indices) {
+                t.pushFrame(s.stamps[i], s.depth[i], s.intensity[i])
+                if (i % 3 == 0) { t.flush(); seen += t.trajectorySince(seen.size) }
+            }
+            t.flush()
+            seen += t.trajectorySince(seen.size)
+            assertEquals(TimedPose.listFromArray(s.expectedTrajectory), seen)
+            assertEquals(0, t.trajectorySince(seen.size + 5).size)
+            assertEquals(seen.subList(seen.size - 2, seen.size), t.trajectorySince(seen.size - 2))
+            assertThrows<IllegalArgumentException>("from") { NativeBridge.nativeTrajectorySince(handleOf(t), -1) }
+        }
+    }
+
+    @Test
+    fun paddedPlanesGiveTheSamePosesAsPackedOnes() {
+        val s = stream()
+        val w = s.width; val h = s.height
+        val depthStride = 2 * w + 64; val grayStride = w + 32
+        // Like an Image plane: padded rows, the last row without padding.
+        val d = ByteBuffer.allocateDirect(depthStride * (h - 1) + 2 * w).order(ByteOrder.nativeOrder())
+        val g = ByteBuffer.allocateDirect(grayStride * (h - 1) + w)
+        Tracker(config(s)).use { t ->
+            for (i in s.stamps.indices) {
+                for (y in 0 until h) {
+                    for (x in 0 until w) d.putShort(y * depthStride + 2 * x, s.depth[i][y * w + x])
+                    for (x in 0 until w) g.put(y * grayStride + x, s.intensity[i][y * w + x])
+                    if (y < h - 1) {
+                        for (p in 2 * w until depthStride) d.put(y * depthStride + p, 0x7F) // padding is never read
+                        for (p in w until grayStride) g.put(y * grayStride + p, 0x7F)
+                    }
+                }
+                assertEquals(PushStatus.ACCEPTED, t.pushFrame(s.stamps[i], d, depthStride, g, grayStride))
+            }
+            t.flush()
+            assertArrayEquals(s.expectedTrajectory, NativeBridgeAccess.trajectory(t), 0.0)
+        }
+    }
+
+    @Test fun badRowStridesAreRejectedWithTheirBuffer(): Unit = Tracker(config()).use { t ->
+        assertThrows<IllegalArgumentException>("depth: row stride") { t.pushFrame(1, directDepth(), 2 * 320 - 2, directGray(), 320) }
+        assertThrows<IllegalArgumentException>("intensity: row stride") { t.pushFrame(1, directDepth(), 640, directGray(), 100) }
+        assertThrows<IllegalArgumentException>("negative") { t.pushFrame(1, directDepth(), -640, directGray(), 320) }
+        // A padded stride needs a bigger buffer than the packed frame.
+        assertThrows<IllegalArgumentException>("intensity: buffer holds") { t.pushFrame(1, directDepth(), 640, directGray(), 400) }
+        assertEquals(PushStatus.ACCEPTED, t.pushFrame(2, directDepth(), 640, directGray(400 * 179 + 320), 400))
+    }
+
+    @Test
+    fun autoConfidenceKeepsASensorThatMarksEverythingZeroPercent() {
+        val s = stream()
+        assumeTrue("depth fits 13 bits", s.depth.all { f -> f.all { (it.toInt() and 0xFFFF) < 8192 } })
+        val cfg = config(s).copy(depthFormat = DepthFormat.DEPTH16, minConfidence = TrackerConfig.AUTO_CONFIDENCE)
+        Tracker(cfg).use { t ->
+            for (i in s.stamps.indices) {
+                val d = ShortArray(s.depth[i].size) { k -> (s.depth[i][k].toInt() or (1 shl 13)).toShort() } // code 1, "0 %"
+                t.pushFrame(s.stamps[i], d, s.intensity[i])
+            }
+            t.flush()
+            assertArrayEquals(s.expectedTrajectory, NativeBridgeAccess.trajectory(t), 0.0)
+        }
+    }
+
+    @Test
+    fun aTrackerLeftToTheGarbageCollectorIsReleased() {
+        // Made in a function of its own, so that no local keeps the Tracker reachable.
+        fun leak(): Any = NativeBridgeAccess.handleObject(Tracker(config()))
+        val handle = leak()
+        val h = NativeBridgeAccess.value(handle)
+        assertTrue(h != 0L)
+        val deadline = System.nanoTime() + 10_000_000_000L
+        while (NativeBridgeAccess.value(handle) != 0L && System.nanoTime() < deadline) {
+            System.gc()
+            Thread.sleep(20)
+        }
+        assertEquals("the Cleaner released the native tracker", 0L, NativeBridgeAccess.value(handle))
+        assertThrows<IllegalStateException>("released") { NativeBridge.nativeState(h) }
+    }
+
     // --- misuse ---------------------------------------------------------------------------
 
     @Test fun nullDepthBuffer(): Unit = Tracker(config()).use { t ->
@@ -211,7 +297,7 @@ class NativeBridgeTest {
 
     @Test fun badCodes() {
         fun init(format: Int = 0, preset: Int = 1, mode: Int = 2) =
-            NativeBridge.nativeInit(320, 180, 250.0, 250.0, 159.5, 89.5, format, 1000.0, 0, preset, mode, true, 2)
+            NativeBridge.nativeInit(320, 180, 250.0, 250.0, 159.5, 89.5, format, 1000.0, 0, preset, mode, true, 2, false)
         assertThrows<IllegalArgumentException>("depthFormat") { init(format = 3) }
         assertThrows<IllegalArgumentException>("preset") { init(preset = -1) }
         assertThrows<IllegalArgumentException>("mode") { init(mode = 7) }
@@ -262,7 +348,7 @@ class NativeBridgeTest {
     }
 
     @Test fun staleAndBogusHandles() {
-        val h = NativeBridge.nativeInit(320, 180, 250.0, 250.0, 159.5, 89.5, 0, 1000.0, 0, 1, 2, true, 1)
+        val h = NativeBridge.nativeInit(320, 180, 250.0, 250.0, 159.5, 89.5, 0, 1000.0, 0, 1, 2, true, 1, false)
         NativeBridge.nativeRelease(h)
         NativeBridge.nativeRelease(h) // unknown handle: nothing
         NativeBridge.nativeRelease(0)
@@ -329,7 +415,7 @@ class NativeBridgeTest {
     @Test fun releaseRacingWithCallsOnOtherThreads() {
         // Bypasses Tracker's lock on purpose: the native side must cope on its own.
         repeat(5) {
-            val h = NativeBridge.nativeInit(320, 180, 250.0, 250.0, 159.5, 89.5, 0, 1000.0, 0, 1, 2, true, 2)
+            val h = NativeBridge.nativeInit(320, 180, 250.0, 250.0, 159.5, 89.5, 0, 1000.0, 0, 1, 2, true, 2, false)
             val start = CountDownLatch(1)
             val unexpected = AtomicReference<Throwable?>(null)
             val callers = (0 until 3).map { k ->
@@ -383,11 +469,21 @@ class NativeBridgeTest {
 
 /** Reads Tracker's private handle and raw arrays, for tests that call NativeBridge directly. */
 internal object NativeBridgeAccess {
-    fun handle(t: Tracker): Long {
+    /** Tracker's private `Handle` object (shared with its Cleaner). */
+    fun handleObject(t: Tracker): Any {
         val f = Tracker::class.java.getDeclaredField("handle")
         f.isAccessible = true
-        return f.getLong(t)
+        return f.get(t)
     }
+
+    /** The native handle held by a `Handle` object (0 once released). */
+    fun value(handle: Any): Long {
+        val f = handle.javaClass.getDeclaredField("value")
+        f.isAccessible = true
+        return f.getLong(handle)
+    }
+
+    fun handle(t: Tracker): Long = value(handleObject(t))
 
     fun trajectory(t: Tracker): DoubleArray = NativeBridge.nativeTrajectory(handle(t))
 }

@@ -14,16 +14,29 @@ internal object NativeBridge {
         System.loadLibrary("ecvo_jni")
     }
 
+    /** Does nothing; calling it runs the `init` above (loading the library) or throws its LinkageError. */
+    fun ensureLoaded() = Unit
+
     /** Creates a tracker; returns its handle (never 0). Codes: see [TrackerConfig]. */
     @JvmStatic external fun nativeInit(
         width: Int, height: Int,
         fx: Double, fy: Double, cx: Double, cy: Double,
         depthFormat: Int, depthScale: Double, minConfidence: Int,
-        preset: Int, mode: Int, live: Boolean, threads: Int,
+        preset: Int, mode: Int, live: Boolean, threads: Int, pointCloud: Boolean,
     ): Long
 
     /** Copies one frame from direct buffers; returns a [PushStatus] code. */
     @JvmStatic external fun nativePushBuffers(handle: Long, timestampNs: Long, depth: ByteBuffer?, intensity: ByteBuffer?): Int
+
+    /**
+     * Copies one frame from direct buffers whose rows are [depthRowStride] and
+     * [intensityRowStride] bytes apart (an `ImageReader` plane with padding); returns a
+     * [PushStatus] code.
+     */
+    @JvmStatic external fun nativePushStrided(
+        handle: Long, timestampNs: Long,
+        depth: ByteBuffer?, depthRowStride: Int, intensity: ByteBuffer?, intensityRowStride: Int,
+    ): Int
 
     /** Copies one frame from arrays; returns a [PushStatus] code. */
     @JvmStatic external fun nativePushArrays(handle: Long, timestampNs: Long, depth: ShortArray?, intensity: ByteArray?): Int
@@ -39,6 +52,9 @@ internal object NativeBridge {
 
     /** The trajectory so far: 8 doubles per frame (t seconds, tx, ty, tz, qx, qy, qz, qw). */
     @JvmStatic external fun nativeTrajectory(handle: Long): DoubleArray
+
+    /** The poses from trajectory index [from] on (same layout); empty when there are none. */
+    @JvmStatic external fun nativeTrajectorySince(handle: Long, from: Int): DoubleArray
 
     /** The reference frames chosen so far, same layout plus the level: 9 doubles each. */
     @JvmStatic external fun nativeReferences(handle: Long): DoubleArray

@@ -1,9 +1,44 @@
 package io.ecvo
 
+import java.lang.ref.Cleaner
 import java.nio.ByteBuffer
 import java.util.concurrent.locks.ReentrantReadWriteLock
+import java.util.logging.Logger
 import kotlin.concurrent.read
 import kotlin.concurrent.write
+
+/**
+ * What the app needs from a tracker: implemented by [Tracker] over the native library,
+ * and by fakes in tests of the app's session logic.
+ */
+interface PoseTracker : AutoCloseable {
+    /** Pushes one frame (see [Tracker.pushFrame]). */
+    fun pushFrame(timestampNs: Long, depth: ShortArray, intensity: ByteArray): PushStatus
+
+    /** The latest pose into `out[0..16]`; its timestamp, or [Tracker.NO_POSE]. */
+    fun getPose(out: FloatArray): Long
+
+    /** The current tracking state. */
+    val state: TrackingState
+
+    /** Counters and per-stage times. */
+    fun stats(): TrackerStats
+
+    /** The poses from index [from] of the trajectory on. */
+    fun trajectorySince(from: Int): List<TimedPose>
+
+    /** The reference frames chosen so far. */
+    fun references(): List<ReferenceFrame>
+
+    /** Up to [maxPoints] points of the reference frames' cloud, 4 floats each. */
+    fun pointCloud(maxPoints: Int): FloatArray
+
+    /** Blocks until every accepted frame has been tracked. */
+    fun flush()
+
+    /** Whether [close] has been called. */
+    val isClosed: Boolean
+}
 
 /**
  * An RGB-D camera tracker (An et al., WACV 2018) running in `libecvo_jni`; owns the
@@ -24,34 +59,57 @@ import kotlin.concurrent.write
  * native side throws IllegalArgumentException for bad input and RuntimeException for
  * an internal error.
  *
+ * A tracker that becomes unreachable without [close] is released by a [Cleaner] (its
+ * native threads would otherwise run until the process ends), which logs a warning:
+ * that is a leak in the caller to fix, not a way to release trackers.
+ *
  * @throws IllegalArgumentException from the constructor if the native side rejects
  *   [config]; the message names the field.
+ * @throws UnsatisfiedLinkError or NoClassDefFoundError if `libecvo_jni` cannot be loaded;
+ *   [nativeLibraryError] turns that into a message first.
  */
-class Tracker(val config: TrackerConfig) : AutoCloseable {
-    /** The native handle; 0 once closed. Guarded by [lock]. */
-    private var handle: Long
+class Tracker(val config: TrackerConfig) : PoseTracker {
+    /** The native handle and its release, shared with the [Cleaner] (which must not reach this object). */
+    private class Handle(var value: Long) : Runnable {
+        /** Calls share the read lock; [run] takes the write lock, so it never frees a handle in use. */
+        val lock = ReentrantReadWriteLock()
+        @Volatile var closedExplicitly = false
 
-    /** Calls share the read lock; [close] takes the write lock, so it never frees a handle in use. */
-    private val lock = ReentrantReadWriteLock()
+        override fun run() = lock.write {
+            val h = value
+            if (h != 0L) {
+                try {
+                    if (!closedExplicitly) LOG.warning("ecvo: a Tracker was garbage-collected without close(); releasing its native tracker $h")
+                    NativeBridge.nativeRelease(h)
+                } finally {
+                    value = 0L // after the release: 0 means released
+                }
+            }
+        }
+    }
+
+    private val handle: Handle
+    private val cleanable: Cleaner.Cleanable
 
     init {
-        handle = NativeBridge.nativeInit(
+        val h = NativeBridge.nativeInit(
             config.width, config.height,
             config.fx, config.fy, config.cx, config.cy,
             config.depthFormat.code, config.depthScale, config.minConfidence,
-            config.preset.code, config.mode.code, config.admission.live, config.threads,
+            config.preset.code, config.mode.code, config.admission.live, config.threads, config.pointCloud,
         )
-        check(handle != 0L) { "native tracker returned a null handle" }
+        check(h != 0L) { "native tracker returned a null handle" }
+        handle = Handle(h)
+        cleanable = CLEANER.register(this, handle)
     }
 
-    private inline fun <T> withHandle(block: (Long) -> T): T = lock.read {
-        val h = handle
+    private inline fun <T> withHandle(block: (Long) -> T): T = handle.lock.read {
+        val h = handle.value
         check(h != 0L) { "Tracker is closed" }
         block(h)
     }
 
-    /** Whether [close] has been called. */
-    val isClosed: Boolean get() = lock.read { handle == 0L }
+    override val isClosed: Boolean get() = handle.lock.read { handle.value == 0L }
 
     /**
      * Pushes one frame from direct buffers: [depth] holds `width * height` 16-bit samples
@@ -63,8 +121,18 @@ class Tracker(val config: TrackerConfig) : AutoCloseable {
         PushStatus.fromCode(NativeBridge.nativePushBuffers(h, timestampNs, depth, intensity))
     }
 
+    /**
+     * Pushes one frame from direct buffers with padded rows, such as `ImageReader` planes:
+     * row `y` of depth starts at byte `y * depthRowStride` (2 bytes per sample, pixel
+     * stride 2), of intensity at `y * intensityRowStride` (pixel stride 1). A stride
+     * smaller than a row, or a buffer too small for `(height - 1)` strides plus one row,
+     * is an IllegalArgumentException naming the buffer.
+     */
+    fun pushFrame(timestampNs: Long, depth: ByteBuffer, depthRowStride: Int, intensity: ByteBuffer, intensityRowStride: Int): PushStatus =
+        withHandle { h -> PushStatus.fromCode(NativeBridge.nativePushStrided(h, timestampNs, depth, depthRowStride, intensity, intensityRowStride)) }
+
     /** Pushes one frame from arrays; same contract as the ByteBuffer overload. */
-    fun pushFrame(timestampNs: Long, depth: ShortArray, intensity: ByteArray): PushStatus = withHandle { h ->
+    override fun pushFrame(timestampNs: Long, depth: ShortArray, intensity: ByteArray): PushStatus = withHandle { h ->
         PushStatus.fromCode(NativeBridge.nativePushArrays(h, timestampNs, depth, intensity))
     }
 
@@ -74,41 +142,68 @@ class Tracker(val config: TrackerConfig) : AutoCloseable {
      * frame's timestamp in nanoseconds, or [NO_POSE] (leaving [out] untouched) before the
      * first frame is tracked.
      */
-    fun getPose(out: FloatArray): Long = withHandle { h -> NativeBridge.nativeGetPose(h, out) }
+    override fun getPose(out: FloatArray): Long = withHandle { h -> NativeBridge.nativeGetPose(h, out) }
 
     /** The current tracking state. */
-    val state: TrackingState get() = withHandle { h -> TrackingState.fromCode(NativeBridge.nativeState(h)) }
+    override val state: TrackingState get() = withHandle { h -> TrackingState.fromCode(NativeBridge.nativeState(h)) }
 
     /** Blocks until every accepted frame has been tracked. */
-    fun flush(): Unit = withHandle { h -> NativeBridge.nativeFlush(h) }
+    override fun flush(): Unit = withHandle { h -> NativeBridge.nativeFlush(h) }
 
     /** The estimated trajectory so far, one camera-to-world pose per tracked frame. */
     fun trajectory(): List<TimedPose> = withHandle { h -> TimedPose.listFromArray(NativeBridge.nativeTrajectory(h)) }
 
+    /**
+     * The poses from index [from] (0-based, in tracking order) on: a UI that has `n`
+     * poses asks for `trajectorySince(n)` and copies only what is new.
+     */
+    override fun trajectorySince(from: Int): List<TimedPose> = withHandle { h ->
+        require(from >= 0) { "from: $from is negative" }
+        TimedPose.listFromArray(NativeBridge.nativeTrajectorySince(h, from))
+    }
+
     /** The reference frames chosen so far, in time order. */
-    fun references(): List<ReferenceFrame> = withHandle { h -> ReferenceFrame.listFromArray(NativeBridge.nativeReferences(h)) }
+    override fun references(): List<ReferenceFrame> = withHandle { h -> ReferenceFrame.listFromArray(NativeBridge.nativeReferences(h)) }
 
     /** Counters and per-stage times. */
-    fun stats(): TrackerStats = withHandle { h -> TrackerStats.fromArray(NativeBridge.nativeStats(h)) }
+    override fun stats(): TrackerStats = withHandle { h -> TrackerStats.fromArray(NativeBridge.nativeStats(h)) }
 
     /**
      * A snapshot of the reference frames' points in world coordinates: 4 floats per point
-     * (x, y, z, intensity 0..1), at most [maxPoints] points.
+     * (x, y, z, intensity 0..1), at most [maxPoints] points; none unless
+     * [TrackerConfig.pointCloud].
      */
-    fun pointCloud(maxPoints: Int): FloatArray = withHandle { h -> NativeBridge.nativePointCloud(h, maxPoints) }
+    override fun pointCloud(maxPoints: Int): FloatArray = withHandle { h -> NativeBridge.nativePointCloud(h, maxPoints) }
 
     /**
      * Releases the native tracker. Waits for calls in progress on other threads; calling it
      * again does nothing.
      */
-    override fun close() = lock.write {
-        val h = handle
-        handle = 0L
-        if (h != 0L) NativeBridge.nativeRelease(h)
+    override fun close() {
+        handle.closedExplicitly = true
+        cleanable.clean()
     }
 
     companion object {
         /** What [getPose] returns when there is no pose yet. */
         const val NO_POSE: Long = Long.MIN_VALUE
+
+        private val LOG: Logger = Logger.getLogger("io.ecvo.Tracker")
+        private val CLEANER: Cleaner = Cleaner.create()
+
+        /**
+         * Loads `libecvo_jni` if it is not loaded yet; null when it is usable, else a
+         * sentence saying why not (missing for this ABI, or failed to initialise). Never
+         * throws: the UI shows the message instead of crashing.
+         */
+        fun nativeLibraryError(): String? = try {
+            NativeBridge.ensureLoaded()
+            null
+        } catch (e: LinkageError) {
+            // UnsatisfiedLinkError the first time, then NoClassDefFoundError /
+            // ExceptionInInitializerError for every later use of NativeBridge.
+            "The tracking library (libecvo_jni) could not be loaded for this phone's CPU " +
+                "(${System.getProperty("os.arch")}): ${e.message ?: e.javaClass.simpleName}. Reinstall the app built for this ABI."
+        }
     }
 }

@@ -174,11 +174,17 @@ enum class TrackingState(val code: Int) {
  * @property depthScale raw depth units per metre; used by [DepthFormat.CUSTOM_SCALE]
  *   only (the millimetre formats imply 1000).
  * @property minConfidence 0..7: [DepthFormat.DEPTH16] pixels with a lower confidence
- *   level become "no measurement" (0 keeps every pixel); ignored by the other formats.
+ *   level become "no measurement" (0 keeps every pixel); [AUTO_CONFIDENCE] (-1) keeps
+ *   levels from 1 unless that drops more than half of a frame's ranged pixels (a sensor
+ *   whose codes do not follow Android's documentation), then every ranged pixel for the
+ *   tracker's life; ignored by the other formats.
  * @property preset the paper's PC or phone thresholds.
  * @property mode naive, L1 or L2 error correction.
  * @property admission drop frames when busy (live camera) or never (replay).
  * @property threads worker threads of the tracker.
+ * @property pointCloud whether the reference frames' point cloud is built (a geometry
+ *   stage that costs time per reference frame); off when nothing shows or exports it,
+ *   and then [Tracker.pointCloud] returns no points.
  */
 data class TrackerConfig(
     val width: Int = 320,
@@ -194,4 +200,10 @@ data class TrackerConfig(
     val mode: Mode = Mode.L2,
     val admission: Admission = Admission.LIVE,
     val threads: Int = 2,
-)
+    val pointCloud: Boolean = false,
+) {
+    companion object {
+        /** [minConfidence] value for the automatic rule (see the property). */
+        const val AUTO_CONFIDENCE: Int = -1
+    }
+}

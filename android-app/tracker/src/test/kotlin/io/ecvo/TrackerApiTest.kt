@@ -137,13 +137,15 @@ class TrackerApiTest {
         val I = Integer.TYPE
         val D = java.lang.Double.TYPE
         val expected = mapOf(
-            "nativeInit" to listOf(I, I, D, D, D, D, I, D, I, I, I, java.lang.Boolean.TYPE, I),
+            "nativeInit" to listOf(I, I, D, D, D, D, I, D, I, I, I, java.lang.Boolean.TYPE, I, java.lang.Boolean.TYPE),
             "nativePushBuffers" to listOf(J, J, ByteBuffer::class.java, ByteBuffer::class.java),
+            "nativePushStrided" to listOf(J, J, ByteBuffer::class.java, I, ByteBuffer::class.java, I),
             "nativePushArrays" to listOf(J, J, ShortArray::class.java, ByteArray::class.java),
             "nativeGetPose" to listOf(J, FloatArray::class.java),
             "nativeState" to listOf(J),
             "nativeFlush" to listOf(J),
             "nativeTrajectory" to listOf(J),
+            "nativeTrajectorySince" to listOf(J, I),
             "nativeReferences" to listOf(J),
             "nativeStats" to listOf(J),
             "nativePointCloud" to listOf(J, I),

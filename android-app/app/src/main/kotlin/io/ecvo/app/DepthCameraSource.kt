@@ -9,83 +9,128 @@ import android.hardware.camera2.CameraDevice
 import android.hardware.camera2.CameraManager
 import android.hardware.camera2.CameraMetadata
 import android.media.ImageReader
+import android.os.Build
 import android.os.Handler
-import android.util.Size
+import android.os.SystemClock
+import io.ecvo.shared.CameraCalibration
 import io.ecvo.shared.CameraIntrinsics
-import io.ecvo.shared.Depth16
-import io.ecvo.shared.DepthResample
+import io.ecvo.shared.CameraPose
+import io.ecvo.shared.ConfidencePolicy
+import io.ecvo.shared.DepthDecoder
+import io.ecvo.shared.DepthRemap
+import io.ecvo.shared.FramePairer
 import io.ecvo.shared.GrayPlane
 import io.ecvo.shared.IntensityRegistration
-import io.ecvo.shared.LensPose
-import kotlin.math.abs
+import io.ecvo.shared.Pairing
+import io.ecvo.shared.PosePolicy
+import io.ecvo.shared.PoseReference
+import io.ecvo.shared.SensorRect
+import io.ecvo.shared.SourceCallbacks
+import io.ecvo.shared.SourceHandle
+import io.ecvo.shared.StreamSize
+import io.ecvo.shared.StreamSizes
+import io.ecvo.shared.TimestampSource
 
 /**
  * Live frames from a Camera2 depth camera (`ImageFormat.DEPTH16`) with intensity from a
- * colour camera facing the same way (the Y plane of `YUV_420_888`), registered to the
- * depth frame with :shared's [IntensityRegistration]. Frames reach [onFrame] on
- * [handler]'s thread as 320x180 millimetres and 8-bit gray; problems reach [onFailure].
+ * colour camera facing the same way (the Y plane of `YUV_420_888`). Every decision is
+ * made by :shared ([Setup.find] only copies `CameraCharacteristics` into it): the stream
+ * sizes, the 16:9 crop and the intrinsics, lens distortion, the depth-to-colour pose,
+ * pairing by clock, and the confidence policy. Frames reach [callbacks] on [handler]'s
+ * thread as 320x180 millimetres and 8-bit gray; every failure (including a throwing
+ * Camera2 call) reaches `callbacks.failed`, never the thread's uncaught handler.
  */
 class DepthCameraSource(
     private val manager: CameraManager,
     private val setup: Setup,
     private val handler: Handler,
-    private val minConfidence: Int,
-    private val onFrame: (timestampNs: Long, depthMm: ShortArray, intensity: ByteArray) -> Unit,
-    private val onFailure: (String) -> Unit,
-) {
-    /** The cameras and sizes chosen by [find], and the intrinsics of the tracker's frame. */
+    confidence: ConfidencePolicy,
+    private val callbacks: SourceCallbacks,
+    /** Called with each frame handed to the tracker (for the preview). */
+    private val onTracked: (ShortArray, ByteArray) -> Unit = { _, _ -> },
+) : SourceHandle {
+    /** The cameras and sizes chosen by [find], and how a frame is made from them. */
     class Setup(
         val depthId: String,
-        val depthSize: Size,
+        val depthSize: StreamSize,
         val colourId: String,
-        val colourSize: Size,
-        /** Intrinsics of the 320x180 frames handed to the tracker (millimetres). */
-        val frame: CameraIntrinsics,
+        val colourSize: StreamSize,
+        /** Depth stream to tracker frame: crop, scale, undistort; its camera is the tracker's. */
+        val remap: DepthRemap,
         val registration: IntensityRegistration,
-    )
+        val pairing: Pairing,
+        /** Sentences for the user about fallbacks taken (no calibration, no lens pose, clocks). */
+        val notes: List<String>,
+    ) {
+        /** Intrinsics of the frames handed to the tracker. */
+        val frame: CameraIntrinsics get() = remap.camera
+    }
 
     private val depthReader = ImageReader.newInstance(setup.depthSize.width, setup.depthSize.height, ImageFormat.DEPTH16, 3)
     private val colourReader = ImageReader.newInstance(setup.colourSize.width, setup.colourSize.height, ImageFormat.YUV_420_888, 3)
     private val devices = ArrayList<CameraDevice>()
     private val sessions = ArrayList<CameraCaptureSession>()
+    private val decoder = DepthDecoder(confidence)
+    val pairer = FramePairer(setup.pairing)
     private val rawDepth = ShortArray(setup.depthSize.width * setup.depthSize.height)
+    private val frameDepth = ShortArray(setup.frame.pixels)
     private val y = ByteArray(setup.colourSize.width * setup.colourSize.height)
-    private var yTimestamp = Long.MIN_VALUE
+    private var confidenceNoted = false
     @Volatile private var running = false
 
     /** Opens both cameras and starts streaming. Call with the CAMERA permission granted. */
-    @SuppressLint("MissingPermission")
-    fun start() {
+    fun start(): DepthCameraSource {
         running = true
-        colourReader.setOnImageAvailableListener({ r ->
-            val img = r.acquireLatestImage() ?: return@setOnImageAvailableListener
-            img.use {
-                val p = it.planes[0] // Y: pixel stride 1
-                val b = p.buffer
-                val w = setup.colourSize.width
-                for (row in 0 until setup.colourSize.height) {
-                    b.position(row * p.rowStride)
-                    b.get(y, row * w, w)
-                }
-                yTimestamp = it.timestamp
-            }
-        }, handler)
-        depthReader.setOnImageAvailableListener({ r ->
-            val img = r.acquireLatestImage() ?: return@setOnImageAvailableListener
-            val ts = img.use {
-                val p = it.planes[0]
-                Depth16.decodePlane(p.buffer, p.rowStride, setup.depthSize.width, setup.depthSize.height, minConfidence, rawDepth)
-                it.timestamp
-            }
-            // Pair with the latest Y image if it is close enough in time (same clock on one device).
-            if (!running || yTimestamp == Long.MIN_VALUE || abs(ts - yTimestamp) > MAX_PAIR_DT_NS) return@setOnImageAvailableListener
-            val f = setup.frame
-            val depth = DepthResample.nearest(rawDepth, setup.depthSize.width, setup.depthSize.height, f.width, f.height)
-            val gray = setup.registration.register(depth, GrayPlane(y, setup.colourSize.width, setup.colourSize.height))
-            onFrame(ts, depth, gray)
-        }, handler)
+        colourReader.setOnImageAvailableListener({ r -> guarded("colour frame") { onColour(r) } }, handler)
+        depthReader.setOnImageAvailableListener({ r -> guarded("depth frame") { onDepth(r) } }, handler)
         open(setup.colourId, colourReader)
         open(setup.depthId, depthReader)
+        return this
+    }
+
+    private inline fun guarded(what: String, block: () -> Unit) {
+        try {
+            block()
+        } catch (e: Exception) {
+            callbacks.failed("$what: ${e.message ?: e.javaClass.simpleName}")
+        }
+    }
+
+    private fun onColour(r: ImageReader) {
+        val img = r.acquireLatestImage() ?: return
+        try {
+            val p = img.planes[0] // Y: pixel stride 1, rows rowStride apart
+            val b = p.buffer
+            val w = setup.colourSize.width
+            for (row in 0 until setup.colourSize.height) {
+                b.position(row * p.rowStride)
+                b.get(y, row * w, w)
+            }
+            pairer.onColour(img.timestamp, SystemClock.elapsedRealtimeNanos())
+        } finally {
+            img.close()
+        }
+    }
+
+    private fun onDepth(r: ImageReader) {
+        val img = r.acquireLatestImage() ?: return
+        val ts: Long
+        try {
+            val p = img.planes[0]
+            decoder.decodePlane(p.buffer, p.rowStride, setup.depthSize.width, setup.depthSize.height, rawDepth)
+            ts = img.timestamp
+        } finally {
+            img.close()
+        }
+        if (decoder.codesIgnored && !confidenceNoted) {
+            confidenceNoted = true
+            callbacks.notice("This depth camera's confidence codes do not follow Android's documentation; every measured pixel is kept.")
+        }
+        if (!running || !pairer.onDepth(ts, SystemClock.elapsedRealtimeNanos())) return
+        setup.remap.apply(rawDepth, frameDepth)
+        val gray = setup.registration.register(frameDepth, GrayPlane(y, setup.colourSize.width, setup.colourSize.height))
+        onTracked(frameDepth, gray)
+        callbacks.frame(ts, frameDepth, gray)
     }
 
     @SuppressLint("MissingPermission")
@@ -95,24 +140,35 @@ class DepthCameraSource(
                 override fun onOpened(device: CameraDevice) {
                     if (!running) { device.close(); return }
                     devices += device
-                    @Suppress("DEPRECATION")
-                    device.createCaptureSession(listOf(reader.surface), object : CameraCaptureSession.StateCallback() {
-                        override fun onConfigured(session: CameraCaptureSession) {
-                            if (!running) { session.close(); return }
-                            sessions += session
-                            val request = device.createCaptureRequest(CameraDevice.TEMPLATE_PREVIEW).apply { addTarget(reader.surface) }
-                            session.setRepeatingRequest(request.build(), null, handler)
-                        }
+                    guarded("camera $id") {
+                        @Suppress("DEPRECATION")
+                        device.createCaptureSession(listOf(reader.surface), object : CameraCaptureSession.StateCallback() {
+                            override fun onConfigured(session: CameraCaptureSession) {
+                                if (!running) { session.close(); return }
+                                sessions += session
+                                // Throws CameraAccessException, IllegalStateException (closed) or IllegalArgumentException.
+                                guarded("camera $id: starting the stream") {
+                                    val request = device.createCaptureRequest(CameraDevice.TEMPLATE_PREVIEW)
+                                    request.addTarget(reader.surface)
+                                    session.setRepeatingRequest(request.build(), null, handler)
+                                }
+                            }
 
-                        override fun onConfigureFailed(session: CameraCaptureSession) = onFailure("camera $id: stream configuration failed")
-                    }, handler)
+                            override fun onConfigureFailed(session: CameraCaptureSession) =
+                                callbacks.failed("camera $id: stream configuration failed")
+                        }, handler)
+                    }
                 }
 
-                override fun onDisconnected(device: CameraDevice) { device.close(); onFailure("camera $id was disconnected") }
+                override fun onDisconnected(device: CameraDevice) {
+                    device.close()
+                    // Ignored by the controller if this source was already replaced.
+                    callbacks.failed("camera $id was disconnected")
+                }
 
                 override fun onError(device: CameraDevice, error: Int) {
                     device.close()
-                    onFailure(
+                    callbacks.failed(
                         if (error == CameraDevice.StateCallback.ERROR_MAX_CAMERAS_IN_USE || error == CameraDevice.StateCallback.ERROR_CAMERA_IN_USE) {
                             "camera $id is in use; this phone may not stream the depth and colour cameras at once"
                         } else {
@@ -122,28 +178,38 @@ class DepthCameraSource(
                 }
             }, handler)
         } catch (e: CameraAccessException) {
-            onFailure("camera $id: ${e.message}")
+            callbacks.failed("camera $id: ${e.message}")
+        } catch (e: SecurityException) {
+            callbacks.failed("camera $id: camera permission missing")
         }
     }
 
-    /** Stops streaming and closes the cameras. */
-    fun stop() {
+    /** Stops streaming and closes the cameras and readers (on the camera thread). */
+    override fun stop() {
         running = false
         handler.post {
-            sessions.forEach { it.close() }
-            devices.forEach { it.close() }
+            sessions.forEach { runCatching { it.close() } }
+            devices.forEach { runCatching { it.close() } }
             sessions.clear(); devices.clear()
             depthReader.close(); colourReader.close()
         }
     }
 
     companion object {
-        /** Largest time between a depth image and the Y image used for its intensity. */
-        const val MAX_PAIR_DT_NS = 50_000_000L
+        /**
+         * Whether some camera has the `DEPTH_OUTPUT` capability (readable without the
+         * CAMERA permission; the calibration is read later, by [find]).
+         */
+        fun hasDepthCamera(manager: CameraManager): Boolean = manager.cameraIdList.any { id ->
+            manager.getCameraCharacteristics(id).get(CameraCharacteristics.REQUEST_AVAILABLE_CAPABILITIES)
+                ?.contains(CameraMetadata.REQUEST_AVAILABLE_CAPABILITIES_DEPTH_OUTPUT) == true
+        }
 
         /**
          * Finds a camera with `DEPTH_OUTPUT` and DEPTH16 streams and a colour camera facing
-         * the same way; null if the phone has no depth camera (the UI says so).
+         * the same way, reading their calibration; null if the phone has no depth camera.
+         * Call at the start of a session, after the CAMERA permission was granted: without
+         * it, Camera2 hides `LENS_INTRINSIC_CALIBRATION` and `LENS_POSE_*`.
          */
         fun find(manager: CameraManager, frameWidth: Int = 320, frameHeight: Int = 180): Setup? {
             val ids = manager.cameraIdList
@@ -151,58 +217,73 @@ class DepthCameraSource(
                 val dc = manager.getCameraCharacteristics(depthId)
                 val caps = dc.get(CameraCharacteristics.REQUEST_AVAILABLE_CAPABILITIES) ?: continue
                 if (CameraMetadata.REQUEST_AVAILABLE_CAPABILITIES_DEPTH_OUTPUT !in caps) continue
-                val sizes = dc.get(CameraCharacteristics.SCALER_STREAM_CONFIGURATION_MAP)?.getOutputSizes(ImageFormat.DEPTH16) ?: continue
-                if (sizes.isEmpty()) continue
-                // The size closest to the tracker's frame, preferring the same aspect.
-                val depthSize = sizes.minBy { abs(it.width - frameWidth) + abs(it.height - frameHeight) * 2 }
+                val sizes = dc.get(CameraCharacteristics.SCALER_STREAM_CONFIGURATION_MAP)?.getOutputSizes(ImageFormat.DEPTH16)
+                    ?.map { StreamSize(it.width, it.height) } ?: continue
+                val depthSize = StreamSizes.depth(sizes, frameWidth, frameHeight) ?: continue
                 val facing = dc.get(CameraCharacteristics.LENS_FACING)
-                val colourId = ids.firstOrNull { id ->
-                    if (id == depthId) return@firstOrNull false
-                    val c = manager.getCameraCharacteristics(id)
-                    c.get(CameraCharacteristics.LENS_FACING) == facing &&
-                        c.get(CameraCharacteristics.REQUEST_AVAILABLE_CAPABILITIES)
-                            ?.contains(CameraMetadata.REQUEST_AVAILABLE_CAPABILITIES_BACKWARD_COMPATIBLE) == true
-                } ?: continue
+                // Colour cameras facing the same way; the largest sensor is the "primary" one.
+                val colours = ids.filter { id ->
+                    id != depthId && manager.getCameraCharacteristics(id).let { c ->
+                        c.get(CameraCharacteristics.LENS_FACING) == facing &&
+                            c.get(CameraCharacteristics.REQUEST_AVAILABLE_CAPABILITIES)
+                                ?.contains(CameraMetadata.REQUEST_AVAILABLE_CAPABILITIES_BACKWARD_COMPATIBLE) == true
+                    }
+                }
+                if (colours.isEmpty()) continue
+                val primary = colours.maxBy { id ->
+                    manager.getCameraCharacteristics(id).get(CameraCharacteristics.SENSOR_INFO_ACTIVE_ARRAY_SIZE)?.let { it.width().toLong() * it.height() } ?: 0L
+                }
+                val colourId = colours.first()
                 val cc = manager.getCameraCharacteristics(colourId)
-                val yuv = cc.get(CameraCharacteristics.SCALER_STREAM_CONFIGURATION_MAP)?.getOutputSizes(ImageFormat.YUV_420_888) ?: continue
-                val aspect = depthSize.width.toDouble() / depthSize.height
-                // Small but at least twice the tracker's width, with the depth camera's aspect if possible.
-                val colourSize = yuv.filter { it.width >= 2 * frameWidth }
-                    .minByOrNull { abs(it.width.toDouble() / it.height - aspect) * 10_000 + it.width }
-                    ?: yuv.maxBy { it.width * it.height }
-                val depthCam = intrinsics(dc, depthSize)
-                val colourCam = intrinsics(cc, colourSize)
-                val frame = depthCam.resized(frameWidth, frameHeight)
-                val relative = LensPose.depthToColour(
-                    dc.get(CameraCharacteristics.LENS_POSE_ROTATION), dc.get(CameraCharacteristics.LENS_POSE_TRANSLATION),
-                    cc.get(CameraCharacteristics.LENS_POSE_ROTATION), cc.get(CameraCharacteristics.LENS_POSE_TRANSLATION),
+                val yuv = cc.get(CameraCharacteristics.SCALER_STREAM_CONFIGURATION_MAP)?.getOutputSizes(ImageFormat.YUV_420_888)
+                    ?.map { StreamSize(it.width, it.height) } ?: continue
+                val colourSize = StreamSizes.colour(yuv, depthSize, frameWidth) ?: continue
+
+                val notes = ArrayList<String>()
+                val depthCal = calibration(dc)
+                val colourCal = calibration(cc)
+                if (!depthCal.calibrated) notes += "The depth camera publishes no intrinsic calibration; its focal length is estimated from the lens and sensor size."
+                val depthCam = depthCal.sensorIntrinsics().forOutput(depthSize.width, depthSize.height)
+                val colourCam = colourCal.sensorIntrinsics().forOutput(colourSize.width, colourSize.height)
+                val remap = DepthRemap.create(depthCam, frameWidth, frameHeight, depthCal.effectiveDistortion)
+                val decision = PosePolicy.decide(pose(dc), pose(cc), colourIsPrimary = colourId == primary)
+                decision.note?.let { notes += it }
+                val pairing = Pairing.choose(clock(dc), clock(cc))
+                if (pairing == Pairing.ARRIVAL_TIME) notes += "The cameras' timestamps are not on a common clock; depth and colour are paired by arrival time."
+                return Setup(
+                    depthId, depthSize, colourId, colourSize, remap,
+                    IntensityRegistration(remap.camera, colourCam, decision.depthToColour), pairing, notes,
                 )
-                return Setup(depthId, depthSize, colourId, colourSize, frame, IntensityRegistration(frame, colourCam, relative))
             }
             return null
         }
 
-        /**
-         * Pinhole intrinsics of a camera's output of [size]: from `LENS_INTRINSIC_CALIBRATION`
-         * (given for the pre-correction active array) when present, else from the focal
-         * length and the physical sensor size with the principal point at the centre; then
-         * cropped and scaled the way Camera2 makes an output of another aspect (centred crop).
-         */
-        private fun intrinsics(c: CameraCharacteristics, size: Size): CameraIntrinsics {
-            val array = c.get(CameraCharacteristics.SENSOR_INFO_PRE_CORRECTION_ACTIVE_ARRAY_SIZE)
-            val cal = c.get(CameraCharacteristics.LENS_INTRINSIC_CALIBRATION)
-            if (cal != null && array != null && cal[0] > 0f && cal[1] > 0f) {
-                val full = CameraIntrinsics(array.width(), array.height(), cal[0].toDouble(), cal[1].toDouble(),
-                    (cal[2] - array.left).toDouble(), (cal[3] - array.top).toDouble())
-                return full.forOutput(size.width, size.height)
-            }
-            val f = c.get(CameraCharacteristics.LENS_INFO_AVAILABLE_FOCAL_LENGTHS)?.firstOrNull() ?: 0f
+        private fun calibration(c: CameraCharacteristics): CameraCalibration {
+            val pre = c.get(CameraCharacteristics.SENSOR_INFO_PRE_CORRECTION_ACTIVE_ARRAY_SIZE)
+            val active = c.get(CameraCharacteristics.SENSOR_INFO_ACTIVE_ARRAY_SIZE)
             val phys = c.get(CameraCharacteristics.SENSOR_INFO_PHYSICAL_SIZE)
-            val w = array?.width() ?: size.width
-            val h = array?.height() ?: size.height
-            val fx: Double = if (f > 0f && phys != null && phys.width > 0f) (f / phys.width * w).toDouble() else w * 0.8
-            val fy: Double = if (f > 0f && phys != null && phys.height > 0f) (f / phys.height * h).toDouble() else fx
-            return CameraIntrinsics(w, h, fx, fy, (w - 1) / 2.0, (h - 1) / 2.0).forOutput(size.width, size.height)
+            val distortion = if (Build.VERSION.SDK_INT >= 28) c.get(CameraCharacteristics.LENS_DISTORTION) else null
+            // Outputs are corrected only if the camera has a correction mode other than OFF
+            // (and then FAST by default); depth cameras normally have none.
+            val corrected = Build.VERSION.SDK_INT >= 28 &&
+                (c.get(CameraCharacteristics.DISTORTION_CORRECTION_AVAILABLE_MODES)?.any { it != CameraMetadata.DISTORTION_CORRECTION_MODE_OFF } == true)
+            return CameraCalibration(
+                pre?.let { SensorRect(it.left, it.top, it.width(), it.height()) },
+                active?.let { SensorRect(it.left, it.top, it.width(), it.height()) },
+                c.get(CameraCharacteristics.LENS_INTRINSIC_CALIBRATION),
+                distortion,
+                c.get(CameraCharacteristics.LENS_INFO_AVAILABLE_FOCAL_LENGTHS)?.firstOrNull(),
+                phys?.width, phys?.height,
+                corrected,
+            )
         }
+
+        private fun pose(c: CameraCharacteristics) = CameraPose(
+            c.get(CameraCharacteristics.LENS_POSE_ROTATION),
+            c.get(CameraCharacteristics.LENS_POSE_TRANSLATION),
+            PoseReference.fromCode(if (Build.VERSION.SDK_INT >= 28) c.get(CameraCharacteristics.LENS_POSE_REFERENCE) else null),
+        )
+
+        private fun clock(c: CameraCharacteristics) = TimestampSource.fromCode(c.get(CameraCharacteristics.SENSOR_INFO_TIMESTAMP_SOURCE))
     }
 }

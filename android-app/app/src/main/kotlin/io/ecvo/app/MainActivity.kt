@@ -1,79 +1,72 @@
 package io.ecvo.app
 
 import android.Manifest
+import android.app.Activity
+import android.app.AlertDialog
+import android.content.ActivityNotFoundException
 import android.content.Intent
 import android.content.pm.PackageManager
+import android.graphics.Bitmap
 import android.hardware.camera2.CameraManager
-import android.net.Uri
 import android.os.Bundle
 import android.os.Handler
-import android.os.HandlerThread
 import android.os.Looper
-import android.os.SystemClock
 import android.util.Log
 import android.view.View
+import android.view.WindowManager
 import android.widget.Button
+import android.widget.ImageView
 import android.widget.RadioGroup
 import android.widget.TextView
 import android.widget.Toast
 import android.widget.ToggleButton
-import androidx.activity.result.contract.ActivityResultContracts
-import androidx.appcompat.app.AlertDialog
-import androidx.appcompat.app.AppCompatActivity
-import androidx.core.content.ContextCompat
-import io.ecvo.Admission
-import io.ecvo.DepthFormat
+import io.ecvo.ReferenceFrame
 import io.ecvo.Tracker
 import io.ecvo.TrackerConfig
+import io.ecvo.shared.AppSettings
 import io.ecvo.shared.CameraIntrinsics
+import io.ecvo.shared.ConfidencePolicy
+import io.ecvo.shared.DirectoryFiles
 import io.ecvo.shared.FrameSource
+import io.ecvo.shared.PreviewKind
 import io.ecvo.shared.ProjectionPlane
+import io.ecvo.shared.Recordings
+import io.ecvo.shared.SessionController
+import io.ecvo.shared.SessionExport
 import io.ecvo.shared.StatusKind
 import io.ecvo.shared.StreamFiles
 import io.ecvo.shared.StreamReader
 import io.ecvo.shared.StreamRecorder
-import io.ecvo.shared.TrackingPresenter
 import java.io.File
 import java.text.SimpleDateFormat
 import java.util.Date
 import java.util.Locale
 
 /**
- * The one screen: replays the bundled sample or a recording picked with the Storage Access
- * Framework, or tracks live from a depth camera; draws the trajectory and the status; can
- * record what it tracks in the recorded-stream format.
+ * The one screen: replays the bundled sample or one of the app's recordings, or tracks
+ * live from a depth camera; draws the trajectory, the status and an optional preview;
+ * records, shares and sets the settings. The session itself lives in [SessionHolder], so
+ * rotating the phone does not lose it; this class only draws and forwards taps.
+ *
+ * A platform Activity (no AndroidX): its resources and Kotlin are compiled in CI against
+ * the platform alone (scripts/android-stubs).
  */
-class MainActivity : AppCompatActivity() {
-    private val presenter = TrackingPresenter()
+class MainActivity : Activity() {
+    private val controller: SessionController get() = SessionHolder.controller
     private val ui = Handler(Looper.getMainLooper())
-    private lateinit var frameThread: HandlerThread
-    private lateinit var frames: Handler
-
-    private var session: TrackingSession? = null
-    private var replay: Thread? = null
-    private var live: DepthCameraSource? = null
-    private var depthSetup: DepthCameraSource.Setup? = null
     private val pose = FloatArray(16)
+    private var polls = 0L
+    private var references: List<ReferenceFrame> = emptyList()
+    private var settings = AppSettings()
+    private var hasDepthCamera = false
 
     private lateinit var stateText: TextView
     private lateinit var numbersText: TextView
     private lateinit var messageText: TextView
     private lateinit var trajectoryView: TrajectoryView
+    private lateinit var preview: ImageView
     private lateinit var liveButton: Button
     private lateinit var recordButton: ToggleButton
-
-    private val requestCamera = registerForActivityResult(ActivityResultContracts.RequestPermission()) { granted ->
-        presenter.onCameraPermission(granted)
-        if (granted) startLive()
-        render()
-    }
-
-    private val pickRecording = registerForActivityResult(ActivityResultContracts.OpenDocumentTree()) { uri: Uri? ->
-        if (uri != null) {
-            runCatching { contentResolver.takePersistableUriPermission(uri, Intent.FLAG_GRANT_READ_URI_PERMISSION) }
-            startReplay(DocumentTreeStreamFiles(contentResolver, uri))
-        }
-    }
 
     private val poll = object : Runnable {
         override fun run() {
@@ -82,6 +75,10 @@ class MainActivity : AppCompatActivity() {
         }
     }
 
+    /** From the application context: the camera source outlives this activity (rotation). */
+    private val cameraManager: CameraManager get() = applicationContext.getSystemService(CAMERA_SERVICE) as CameraManager
+    private val recordingsDir: File get() = File(getExternalFilesDir(null) ?: filesDir, "recordings")
+
     override fun onCreate(savedInstanceState: Bundle?) {
         super.onCreate(savedInstanceState)
         setContentView(R.layout.activity_main)
@@ -89,18 +86,20 @@ class MainActivity : AppCompatActivity() {
         numbersText = findViewById(R.id.status_numbers)
         messageText = findViewById(R.id.status_message)
         trajectoryView = findViewById(R.id.trajectory)
+        preview = findViewById(R.id.preview)
         liveButton = findViewById(R.id.live)
         recordButton = findViewById(R.id.record)
-
-        frameThread = HandlerThread("ecvo-frames").also { it.start() }
-        frames = Handler(frameThread.looper)
+        settings = loadSettings()
+        SessionHolder.preview = settings.preview
 
         findViewById<Button>(R.id.replay_sample).setOnClickListener { startReplay(AssetStreamFiles(assets)) }
-        findViewById<Button>(R.id.replay_pick).setOnClickListener { pickRecording.launch(null) }
+        findViewById<Button>(R.id.recordings).setOnClickListener { showRecordings() }
         liveButton.setOnClickListener { onLiveClicked() }
-        findViewById<Button>(R.id.stop).setOnClickListener { stopSource(); render() }
-        findViewById<Button>(R.id.reset).setOnClickListener { reset() }
-        recordButton.setOnCheckedChangeListener { _, on -> setRecording(on) }
+        findViewById<Button>(R.id.stop).setOnClickListener { SessionHolder.resumeLive = false; controller.stopSource(); render() }
+        findViewById<Button>(R.id.reset).setOnClickListener { SessionHolder.resumeLive = false; controller.reset(); trajectoryView.clear(); render() }
+        findViewById<Button>(R.id.export).setOnClickListener { export() }
+        findViewById<Button>(R.id.settings).setOnClickListener { showSettings() }
+        recordButton.setOnClickListener { setRecording(recordButton.isChecked) }
         findViewById<RadioGroup>(R.id.plane).setOnCheckedChangeListener { _, id ->
             trajectoryView.plane = when (id) {
                 R.id.plane_xy -> ProjectionPlane.XY
@@ -109,201 +108,284 @@ class MainActivity : AppCompatActivity() {
             }
         }
 
-        depthSetup = try {
-            DepthCameraSource.find(getSystemService(CAMERA_SERVICE) as CameraManager)
+        hasDepthCamera = try {
+            DepthCameraSource.hasDepthCamera(cameraManager)
         } catch (e: Exception) {
             Log.w(TAG, "looking for a depth camera failed", e)
-            null
+            false
         }
-        presenter.onDepthCameraChecked(depthSetup != null)
+        controller.presenter.onDepthCameraChecked(hasDepthCamera)
         // Not granted yet is not a denial: the user is asked when they press Live.
-        if (depthSetup != null && hasCameraPermission()) presenter.onCameraPermission(true)
+        if (hasDepthCamera && hasCameraPermission()) controller.presenter.onCameraPermission(true)
         render()
     }
 
     override fun onResume() {
         super.onResume()
+        if (SessionHolder.resumeLive) {
+            SessionHolder.resumeLive = false
+            if (hasCameraPermission()) resumeLive()
+        }
         ui.post(poll)
     }
 
     override fun onPause() {
         ui.removeCallbacks(poll)
-        // The camera is released when the app leaves the screen; a replay keeps running.
-        if (live != null) stopSource()
+        // The camera is released when the app leaves the screen (not for a rotation); the
+        // tracker and its trajectory stay, and live tracking resumes on return.
+        if (!isChangingConfigurations && controller.running == FrameSource.LIVE) {
+            SessionHolder.resumeLive = true
+            controller.stopSource()
+        }
         super.onPause()
     }
 
     override fun onDestroy() {
-        stopSource()
-        session?.close()
-        session = null
-        frameThread.quitSafely()
+        // Leaving the app (back) ends the session; a rotation keeps it.
+        if (isFinishing && !isChangingConfigurations) {
+            SessionHolder.resumeLive = false
+            controller.reset()
+        }
         super.onDestroy()
     }
 
-    private fun hasCameraPermission() =
-        ContextCompat.checkSelfPermission(this, Manifest.permission.CAMERA) == PackageManager.PERMISSION_GRANTED
+    private fun hasCameraPermission() = checkSelfPermission(Manifest.permission.CAMERA) == PackageManager.PERMISSION_GRANTED
 
     private fun onLiveClicked() {
-        if (depthSetup == null) { render(); return }
+        if (!hasDepthCamera) { render(); return }
         when {
             hasCameraPermission() -> startLive()
             shouldShowRequestPermissionRationale(Manifest.permission.CAMERA) ->
                 AlertDialog.Builder(this)
                     .setTitle(R.string.permission_title)
                     .setMessage(R.string.permission_rationale)
-                    .setPositiveButton(R.string.permission_continue) { _, _ -> requestCamera.launch(Manifest.permission.CAMERA) }
-                    .setNegativeButton(R.string.permission_not_now) { _, _ -> presenter.onCameraPermission(false); render() }
+                    .setPositiveButton(R.string.permission_continue) { _, _ -> requestPermissions(arrayOf(Manifest.permission.CAMERA), REQUEST_CAMERA) }
+                    .setNegativeButton(R.string.permission_not_now) { _, _ -> controller.presenter.onCameraPermission(false); render() }
                     .show()
-            else -> requestCamera.launch(Manifest.permission.CAMERA)
+            else -> requestPermissions(arrayOf(Manifest.permission.CAMERA), REQUEST_CAMERA)
         }
     }
 
-    /** A fresh tracker for [camera] (the frames' intrinsics; depth in its depth-scale units). */
-    private fun newSession(camera: CameraIntrinsics, admission: Admission): TrackingSession {
-        session?.close()
-        val mm = camera.depthScale == 1000.0
-        val config = TrackerConfig(
-            width = camera.width, height = camera.height,
-            fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy,
-            depthFormat = if (mm) DepthFormat.MILLIMETRES else DepthFormat.CUSTOM_SCALE,
-            depthScale = camera.depthScale,
-            admission = admission,
-        )
-        return TrackingSession(Tracker(config)).also { session = it; trajectoryView.clear() }
+    override fun onRequestPermissionsResult(requestCode: Int, permissions: Array<String>, grantResults: IntArray) {
+        super.onRequestPermissionsResult(requestCode, permissions, grantResults)
+        if (requestCode != REQUEST_CAMERA) return
+        val granted = grantResults.isNotEmpty() && grantResults[0] == PackageManager.PERMISSION_GRANTED
+        controller.presenter.onCameraPermission(granted)
+        if (granted) startLive()
+        render()
     }
+
+    /** The tracker's settings for frames of [camera] from a [kind] source. */
+    private fun trackerConfig(camera: CameraIntrinsics, kind: FrameSource) = TrackerConfig(
+        width = camera.width, height = camera.height,
+        fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy,
+        depthFormat = if (camera.depthScale == 1000.0) io.ecvo.DepthFormat.MILLIMETRES else io.ecvo.DepthFormat.CUSTOM_SCALE,
+        depthScale = camera.depthScale,
+        preset = settings.preset, mode = settings.mode,
+        admission = SessionController.admissionFor(kind),
+        pointCloud = settings.pointCloud,
+    )
 
     private fun startReplay(files: StreamFiles) {
-        stopSource()
-        val s: TrackingSession
-        val reader: StreamReader
-        try {
-            reader = StreamReader(files)
-            // Replaying never drops frames: pushFrame waits for the tracker.
-            s = newSession(reader.camera, Admission.OFFLINE)
+        val reader = try {
+            StreamReader(files)
         } catch (e: Exception) {
-            fail(e)
+            controller.stopSource()
+            controller.presenter.onError("Cannot replay ${files.description}: ${e.message ?: e.javaClass.simpleName}")
+            render()
             return
         }
-        presenter.onStarted(FrameSource.REPLAY, SystemClock.elapsedRealtimeNanos())
-        val thread = Thread({
-            val me = Thread.currentThread()
-            try {
-                // Paced like the recording, so that it is drawn as it was taken.
-                val t0 = SystemClock.elapsedRealtimeNanos()
-                val first = reader.frames.first().timestampNs
-                for (frame in reader) {
-                    if (me.isInterrupted) return@Thread
-                    val wait = (frame.timestampNs - first) - (SystemClock.elapsedRealtimeNanos() - t0)
-                    if (wait > 0) Thread.sleep(wait / 1_000_000, (wait % 1_000_000).toInt())
-                    s.push(frame.timestampNs, frame.depth, frame.intensity)
-                }
-                s.tracker.flush()
-                ui.post { if (replay === me) { replay = null; presenter.onStopped(); refresh() } }
-            } catch (e: InterruptedException) {
-                // Stopped.
-            } catch (e: IllegalStateException) {
-                // The tracker was closed (reset) while replaying.
-            } catch (e: Exception) {
-                ui.post { fail(e) }
-            }
-        }, "ecvo-replay")
-        replay = thread
-        thread.start()
+        SessionHolder.camera = null
+        SessionHolder.resumeLive = false
+        trajectoryView.clear()
+        SessionHolder.previewSize = reader.camera.width to reader.camera.height
+        controller.start(FrameSource.REPLAY, trackerConfig(reader.camera, FrameSource.REPLAY)) { cb ->
+            ReplaySource(reader, cb) { d, g -> if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g) }.start()
+        }
         render()
     }
+
+    /** The live setup of the current session (kept to resume after a pause). */
+    private var liveSetup: DepthCameraSource.Setup?
+        get() = SessionHolder.liveSetup
+        set(v) { SessionHolder.liveSetup = v }
 
     private fun startLive() {
-        val setup = depthSetup ?: return
-        stopSource()
-        val s = try {
-            newSession(setup.frame, Admission.LIVE)
+        // Read now, with the permission granted: earlier, the calibration is hidden.
+        val setup = try {
+            DepthCameraSource.find(cameraManager)
         } catch (e: Exception) {
-            fail(e)
+            controller.presenter.onError("Reading the depth camera failed: ${e.message ?: e.javaClass.simpleName}")
+            render()
             return
         }
-        presenter.onStarted(FrameSource.LIVE, SystemClock.elapsedRealtimeNanos())
-        val source = DepthCameraSource(
-            getSystemService(CAMERA_SERVICE) as CameraManager, setup, frames, minConfidence = 1,
-            onFrame = { ts, depth, gray ->
-                try {
-                    s.push(ts, depth, gray)
-                } catch (e: IllegalStateException) {
-                    // Closed by reset while a frame was in flight.
-                } catch (e: RuntimeException) {
-                    ui.post { stopSource(); fail(e) }
-                }
-            },
-            onFailure = { msg -> ui.post { stopSource(); presenter.onError(msg); render() } },
-        )
-        live = source
-        source.start()
-        render()
-    }
-
-    private fun stopSource() {
-        replay?.let { it.interrupt(); replay = null }
-        live?.let { it.stop(); live = null }
-        if (recordButton.isChecked) recordButton.isChecked = false
-        presenter.onStopped()
-    }
-
-    private fun reset() {
-        stopSource()
-        session?.close()
-        session = null
+        if (setup == null) {
+            hasDepthCamera = false
+            controller.presenter.onDepthCameraChecked(false)
+            render()
+            return
+        }
+        liveSetup = setup
         trajectoryView.clear()
-        presenter.onStopped()
+        if (controller.start(FrameSource.LIVE, trackerConfig(setup.frame, FrameSource.LIVE)) { cb -> openCamera(setup, cb) }) {
+            setup.notes.forEach { controller.presenter.onNotice(it) }
+        }
         render()
+    }
+
+    private fun resumeLive() {
+        val setup = liveSetup ?: return
+        controller.resume(FrameSource.LIVE) { cb -> openCamera(setup, cb) }
+        render()
+    }
+
+    private fun openCamera(setup: DepthCameraSource.Setup, cb: io.ecvo.shared.SourceCallbacks): DepthCameraSource {
+        SessionHolder.previewSize = setup.frame.width to setup.frame.height
+        val source = DepthCameraSource(cameraManager, setup, SessionHolder.frames, settings.confidence, cb) { d, g ->
+            if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g)
+        }
+        SessionHolder.camera = source
+        return source.start()
     }
 
     private fun setRecording(on: Boolean) {
-        val s = session
         if (on) {
-            if (s == null || (replay == null && live == null)) { recordButton.isChecked = false; return }
             val name = SimpleDateFormat("yyyyMMdd-HHmmss", Locale.ROOT).format(Date())
-            val dir = File(getExternalFilesDir(null), "recordings/$name")
-            val c = s.tracker.config
-            try {
-                s.startRecording(StreamRecorder(dir, CameraIntrinsics(c.width, c.height, c.fx, c.fy, c.cx, c.cy, if (c.depthFormat == DepthFormat.CUSTOM_SCALE) c.depthScale else 1000.0)))
-            } catch (e: Exception) {
-                recordButton.isChecked = false
-                fail(e)
-                return
-            }
-            presenter.onRecording(true)
+            val dir = File(recordingsDir, name)
+            if (controller.startRecording { cam -> StreamRecorder(dir, cam) }) SessionHolder.lastRecording = dir
         } else {
-            val r = s?.stopRecording()
-            presenter.onRecording(false)
+            val r = controller.stopRecording()
             if (r != null) Toast.makeText(this, getString(R.string.recorded_to, r.framesWritten, r.dir.path), Toast.LENGTH_LONG).show()
         }
         render()
     }
 
-    private fun fail(e: Exception) {
-        Log.e(TAG, "ecvo", e)
-        presenter.onError(e.message ?: e.toString())
+    private fun showRecordings() {
+        val list = Recordings.list(recordingsDir)
+        if (list.isEmpty()) {
+            Toast.makeText(this, R.string.no_recordings, Toast.LENGTH_LONG).show()
+            return
+        }
+        val labels = list.map { String.format(Locale.ROOT, "%s · %d frames · %.1f MB", it.name, it.frames, it.bytes / 1e6) }.toTypedArray<CharSequence>()
+        AlertDialog.Builder(this)
+            .setTitle(R.string.recordings_title)
+            .setItems(labels) { _, which -> startReplay(DirectoryFiles(list[which].dir)) }
+            .setNegativeButton(R.string.close, null)
+            .show()
+    }
+
+    private fun export() {
+        val session = controller.session
+        if (session == null) {
+            Toast.makeText(this, R.string.nothing_to_export, Toast.LENGTH_LONG).show()
+            return
+        }
+        Toast.makeText(this, R.string.exporting, Toast.LENGTH_SHORT).show()
+        val name = "ecvo-" + SimpleDateFormat("yyyyMMdd-HHmmss", Locale.ROOT).format(Date())
+        val exports = ExportProvider.exportsDir(cacheDir)
+        val recording = SessionHolder.lastRecording
+        val withCloud = settings.pointCloud
+        Thread({
+            try {
+                exports.deleteRecursively()
+                val dir = File(exports, name)
+                val t = session.tracker
+                SessionExport.write(dir, t.trajectorySince(0), t.references(), if (withCloud) t.pointCloud(MAX_EXPORT_POINTS) else null)
+                if (recording != null && recording.isDirectory) recording.copyRecursively(File(dir, "stream"))
+                val zip = File(exports, "$name.zip")
+                SessionExport.zip(dir, zip)
+                dir.deleteRecursively()
+                ui.post { share(zip) }
+            } catch (e: Exception) {
+                ui.post { controller.presenter.onNotice("Export failed: ${e.message ?: e.javaClass.simpleName}"); render() }
+            }
+        }, "ecvo-export").start()
+    }
+
+    private fun share(zip: File) {
+        val send = Intent(Intent.ACTION_SEND)
+            .setType("application/zip")
+            .putExtra(Intent.EXTRA_STREAM, ExportProvider.uriFor(zip))
+            .addFlags(Intent.FLAG_GRANT_READ_URI_PERMISSION)
+        try {
+            startActivity(Intent.createChooser(send, getString(R.string.share_title)))
+        } catch (e: ActivityNotFoundException) {
+            controller.presenter.onNotice("No app can receive the export; it is at ${zip.path}")
+            render()
+        }
+    }
+
+    private fun loadSettings(): AppSettings {
+        val prefs = getSharedPreferences(PREFS, MODE_PRIVATE)
+        return AppSettings.fromMap(prefs.all.mapValues { it.value?.toString() })
+    }
+
+    private fun saveSettings(s: AppSettings) {
+        settings = s
+        SessionHolder.preview = s.preview
+        val e = getSharedPreferences(PREFS, MODE_PRIVATE).edit()
+        for ((k, v) in s.toMap()) e.putString(k, v)
+        e.apply()
+    }
+
+    /** One row per setting; tapping a row moves it to its next value. */
+    private fun showSettings() {
+        val s = settings
+        val rows = arrayOf<CharSequence>(
+            "${getString(R.string.settings_preset)}: ${s.preset}",
+            "${getString(R.string.settings_mode)}: ${s.mode}",
+            "${getString(R.string.settings_confidence)}: ${s.confidence.label}",
+            "${getString(R.string.settings_preview)}: ${s.preview.name.lowercase()}",
+            "${getString(R.string.settings_cloud)}: ${if (s.pointCloud) "on" else "off"}",
+        )
+        AlertDialog.Builder(this)
+            .setTitle(R.string.settings)
+            .setItems(rows) { _, which ->
+                saveSettings(
+                    when (which) {
+                        0 -> s.copy(preset = next(s.preset, io.ecvo.Preset.entries))
+                        1 -> s.copy(mode = next(s.mode, io.ecvo.Mode.entries))
+                        2 -> s.copy(confidence = next(s.confidence, ConfidencePolicy.entries))
+                        3 -> s.copy(preview = next(s.preview, PreviewKind.entries))
+                        else -> s.copy(pointCloud = !s.pointCloud)
+                    },
+                )
+                if (which != 3) Toast.makeText(this, R.string.settings_applies, Toast.LENGTH_SHORT).show()
+                showSettings()
+            }
+            .setNegativeButton(R.string.close, null)
+            .show()
+    }
+
+    private fun <T> next(v: T, all: List<T>): T = all[(all.indexOf(v) + 1) % all.size]
+
+    /** Polls the session and redraws. */
+    private fun refresh() {
+        polls++
+        val ts = controller.poll(pose, SessionHolder.camera?.pairer?.droppedNoColour ?: 0)
+        if (polls % REFERENCES_EVERY == 0L) {
+            references = try {
+                controller.session?.tracker?.references() ?: emptyList()
+            } catch (e: IllegalStateException) {
+                emptyList()
+            }
+        }
+        trajectoryView.show(controller.trajectory.poses, references, if (ts == Tracker.NO_POSE) null else pose)
+        if (polls % PREVIEW_EVERY == 0L) updatePreview()
         render()
     }
 
-    /** Polls the tracker and redraws. */
-    private fun refresh() {
-        val s = session
-        if (s != null && !s.tracker.isClosed) {
-            try {
-                val t = s.tracker
-                val ts = t.getPose(pose)
-                presenter.onTrackerUpdate(t.state, t.stats(), ts, SystemClock.elapsedRealtimeNanos())
-                trajectoryView.show(t.trajectory(), t.references(), if (ts == Tracker.NO_POSE) null else pose)
-            } catch (e: IllegalStateException) {
-                // Closed between the check and the calls.
-            }
-        }
-        render()
+    private fun updatePreview() {
+        val kind = settings.preview
+        preview.visibility = if (kind == PreviewKind.NONE) View.GONE else View.VISIBLE
+        val (w, h) = SessionHolder.previewSize ?: return
+        val px = SessionHolder.latest.takePreview(kind) ?: return
+        if (px.size != w * h) return
+        preview.setImageBitmap(Bitmap.createBitmap(px, w, h, Bitmap.Config.ARGB_8888))
     }
 
     private fun render() {
-        val st = presenter.status
+        val st = controller.presenter.status
         stateText.text = st.state
         stateText.setTextColor(
             when (st.kind) {
@@ -313,15 +395,26 @@ class MainActivity : AppCompatActivity() {
                 StatusKind.IDLE -> 0xFF9E9E9E.toInt()
             },
         )
-        numbersText.text = "${st.timing}   ${st.references}\n${st.frames}"
+        numbersText.text = "${st.timing}   ${st.references}\n${st.frames}\n${st.stages}"
         messageText.text = st.message ?: ""
         messageText.visibility = if (st.message == null) View.GONE else View.VISIBLE
-        liveButton.isEnabled = depthSetup != null
+        liveButton.isEnabled = hasDepthCamera
         if (recordButton.isChecked != st.recording) recordButton.isChecked = st.recording
+        // Keep the screen on during a hands-off live session only.
+        if (controller.running == FrameSource.LIVE) {
+            window.addFlags(WindowManager.LayoutParams.FLAG_KEEP_SCREEN_ON)
+        } else {
+            window.clearFlags(WindowManager.LayoutParams.FLAG_KEEP_SCREEN_ON)
+        }
     }
 
     companion object {
         private const val TAG = "ecvo"
         private const val POLL_MS = 50L
+        private const val REFERENCES_EVERY = 10L
+        private const val PREVIEW_EVERY = 4L
+        private const val REQUEST_CAMERA = 1
+        private const val PREFS = "ecvo-settings"
+        private const val MAX_EXPORT_POINTS = 500_000
     }
 }

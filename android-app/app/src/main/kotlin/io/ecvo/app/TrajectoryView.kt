@@ -75,7 +75,7 @@ class TrajectoryView @JvmOverloads constructor(context: Context, attrs: Attribut
             canvas.drawPath(linePath, pathPaint)
         }
         for (r in scene.references) {
-            canvas.drawCircle(r.x, r.y, (if (r.level >= 2) 5 else 3.5f) * density, if (r.level >= 2) l2Paint else l1Paint)
+            canvas.drawCircle(r.x, r.y, (if (r.level >= 2) 5f else 3.5f) * density, if (r.level >= 2) l2Paint else l1Paint)
         }
         scene.marker?.let { m ->
             if (m.hasHeading) {

@@ -52,6 +52,29 @@ object Depth16 {
     }
 
     /**
+     * Copies a DEPTH16 image plane (an `Image.Plane` buffer: 2-byte samples in [order],
+     * [rowStrideBytes] bytes from row to row, read with absolute indexing from 0) of
+     * [width] x [height] into [out], raw and row-major without padding.
+     */
+    fun readPlane(
+        plane: ByteBuffer, rowStrideBytes: Int, width: Int, height: Int,
+        out: ShortArray = ShortArray(width * height),
+        order: ByteOrder = ByteOrder.nativeOrder(),
+    ): ShortArray {
+        require(width > 0 && height > 0) { "plane size ${width}x$height" }
+        require(out.size == width * height) { "output has ${out.size} values, expected ${width * height}" }
+        require(rowStrideBytes >= 2 * width) { "row stride $rowStrideBytes is less than 2 * width" }
+        require(plane.capacity() >= rowStrideBytes * (height - 1) + 2 * width) { "plane of ${plane.capacity()} bytes is too small for ${width}x$height" }
+        val b = plane.duplicate().order(order)
+        for (y in 0 until height) {
+            val row = y * rowStrideBytes
+            val o = y * width
+            for (x in 0 until width) out[o + x] = b.getShort(row + 2 * x)
+        }
+        return out
+    }
+
+    /**
      * Decodes a DEPTH16 image plane (an `Image.Plane` buffer: 2-byte samples in native
      * order, [rowStrideBytes] bytes from row to row, read with absolute indexing from 0)
      * of [width] x [height] into millimetres, row-major without padding.

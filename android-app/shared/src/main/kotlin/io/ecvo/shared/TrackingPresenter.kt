@@ -19,8 +19,10 @@ data class StatusText(
     val timing: String,
     /** "refs L1 12 · L2 3". */
     val references: String,
-    /** "120 frames · 3 dropped · 1 lost". */
+    /** "120 frames · 3 dropped · 1 lost" (and "· 5 without colour" for live depth frames dropped unpaired). */
     val frames: String,
+    /** "28.4 fps · filter 4.1 · tracker 7.9 · latency 15.2 ms", or "" before the first tracked frame. */
+    val stages: String,
     /** A sentence the user should read (no depth camera, permission denied, stalled, error), or null. */
     val message: String?,
     /** Whether the "live" start button should be enabled. */
@@ -49,6 +51,9 @@ class TrackingPresenter(
     private var lastPoseNs = Long.MIN_VALUE
     private var lastPoseChangeWallNs = 0L
     private var stalled = false
+    private var fps = 0.0
+    private var droppedNoColour = 0L
+    private val notices = LinkedHashSet<String>()
 
     /** The result of looking for a camera with DEPTH_OUTPUT. */
     fun onDepthCameraChecked(available: Boolean) { depthCamera = available }
@@ -56,10 +61,13 @@ class TrackingPresenter(
     /** The answer to the camera permission request. */
     fun onCameraPermission(granted: Boolean) { permissionDenied = !granted }
 
-    /** A source started at wall-clock [nowNs]; clears the previous run's error and numbers. */
+    /** A source started at wall-clock [nowNs]; clears the previous run's error, notices and numbers. */
     fun onStarted(src: FrameSource, nowNs: Long) {
         source = src
         error = null
+        notices.clear()
+        fps = 0.0
+        droppedNoColour = 0
         state = TrackingState.INITIALISING
         stats = TrackerStats.EMPTY
         lastPoseNs = Long.MIN_VALUE
@@ -77,6 +85,19 @@ class TrackingPresenter(
     fun onError(message: String) {
         error = message
         source = FrameSource.NONE
+    }
+
+    /**
+     * Something the user should know that does not stop tracking (a recording that
+     * failed, a camera-geometry fallback, confidence codes ignored); shown until the next
+     * start, each sentence once.
+     */
+    fun onNotice(message: String) { notices += message }
+
+    /** The windowed frame rate and the live depth frames dropped for want of a colour frame. */
+    fun onRates(fps: Double, droppedNoColour: Long) {
+        this.fps = fps
+        this.droppedNoColour = droppedNoColour
     }
 
     /** Recording switched on or off. */
@@ -111,17 +132,22 @@ class TrackingPresenter(
             val frames = buildString {
                 append(stats.framesTracked).append(" frames")
                 if (stats.framesDropped > 0) append(" · ").append(stats.framesDropped).append(" dropped")
+                if (droppedNoColour > 0) append(" · ").append(droppedNoColour).append(" without colour")
                 if (stats.lostFrames > 0) append(" · ").append(stats.lostFrames).append(" lost")
             }
+            val stages = if (stats.framesTracked == 0L) "" else String.format(
+                Locale.ROOT, "%.1f fps · filter %.1f · tracker %.1f · latency %.1f ms", fps, stats.filterMs, stats.trackerMs, stats.latencyMs,
+            )
             val message = when {
                 error != null -> error
                 depthCamera == false -> NO_DEPTH_CAMERA
                 permissionDenied && source != FrameSource.REPLAY -> PERMISSION_DENIED
                 stalled -> STALLED
                 source != FrameSource.NONE && state == TrackingState.LOST -> LOST_HINT
+                notices.isNotEmpty() -> notices.joinToString("\n")
                 else -> null
             }
-            return StatusText(label, kind, timing, refs, frames, message, depthCamera == true && !permissionDenied, recording)
+            return StatusText(label, kind, timing, refs, frames, stages, message, depthCamera == true && !permissionDenied, recording)
         }
 
     companion object {

@@ -1,0 +1,229 @@
+//! `nativeInit`'s arguments, checked into the engine's configuration.
+
+use ecvo_core::{Camera, Config, Mode, Preset};
+use ecvo_pipeline::{Admission, GeometryOptions, PipelineOptions};
+use jni::sys::jint;
+
+use crate::depth16::Confidence;
+use crate::error::{Failure, bad};
+use crate::layout::DepthFormat;
+
+/// The settings of `nativeInit`, checked; the error names the bad field.
+#[derive(Clone, Debug)]
+pub struct InitArgs {
+    /// Frame width in pixels.
+    pub width: jint,
+    /// Frame height in pixels.
+    pub height: jint,
+    /// Focal length x.
+    pub fx: f64,
+    /// Focal length y.
+    pub fy: f64,
+    /// Principal point x.
+    pub cx: f64,
+    /// Principal point y.
+    pub cy: f64,
+    /// `DepthFormat` code.
+    pub depth_format: jint,
+    /// Units per metre for `CUSTOM_SCALE`.
+    pub depth_scale: f64,
+    /// 0..=7, or -1 for [`Confidence::Auto`]; `DEPTH16` only.
+    pub min_confidence: jint,
+    /// `Preset` code.
+    pub preset: jint,
+    /// `Mode` code.
+    pub mode: jint,
+    /// Live (drop when busy) or offline.
+    pub live: bool,
+    /// Compute threads.
+    pub threads: jint,
+    /// Build the reference frames' point cloud (the geometry stage).
+    pub point_cloud: bool,
+}
+
+impl InitArgs {
+    /// The tracker configuration, pipeline options and depth decoding these settings
+    /// describe, or `IllegalArgument` naming the bad field.
+    pub fn build(&self) -> Result<(Config, PipelineOptions, DepthFormat, Confidence), Failure> {
+        let size = |v: jint, name: &str| {
+            usize::try_from(v).map_err(|_| bad(format!("{name}: {v} is negative")))
+        };
+        let width = size(self.width, "width")?;
+        let height = size(self.height, "height")?;
+        let format = DepthFormat::from_code(self.depth_format).ok_or_else(|| {
+            bad(format!(
+                "depthFormat: unknown code {} (0 MILLIMETRES, 1 DEPTH16, 2 CUSTOM_SCALE)",
+                self.depth_format
+            ))
+        })?;
+        let depth_scale = match format {
+            DepthFormat::Millimetres | DepthFormat::Depth16 => 1000.0,
+            DepthFormat::CustomScale => {
+                if !(self.depth_scale.is_finite() && self.depth_scale > 0.0) {
+                    return Err(bad(format!(
+                        "depthScale: {} is not a positive number",
+                        self.depth_scale
+                    )));
+                }
+                self.depth_scale
+            }
+        };
+        let min_confidence = match format {
+            DepthFormat::Depth16 if self.min_confidence == -1 => Confidence::Auto,
+            DepthFormat::Depth16 => u8::try_from(self.min_confidence)
+                .ok()
+                .filter(|c| *c <= 7)
+                .map(Confidence::Documented)
+                .ok_or_else(|| {
+                    bad(format!(
+                        "minConfidence: {} is not in 0..7 or -1 (auto)",
+                        self.min_confidence
+                    ))
+                })?,
+            _ => Confidence::Documented(0),
+        };
+        let preset = match self.preset {
+            0 => Preset::Pc,
+            1 => Preset::Phone,
+            c => return Err(bad(format!("preset: unknown code {c} (0 PC, 1 PHONE)"))),
+        };
+        let mode = match self.mode {
+            0 => Mode::Naive,
+            1 => Mode::L1,
+            2 => Mode::L2,
+            c => return Err(bad(format!("mode: unknown code {c} (0 NAIVE, 1 L1, 2 L2)"))),
+        };
+        let threads = size(self.threads, "threads")?;
+        if !(1..=256).contains(&threads) {
+            return Err(bad(format!("threads: {threads} is not in 1..256")));
+        }
+        for (name, v) in [
+            ("fx", self.fx),
+            ("fy", self.fy),
+            ("cx", self.cx),
+            ("cy", self.cy),
+        ] {
+            if !v.is_finite() {
+                return Err(bad(format!("{name}: {v} is not finite")));
+            }
+        }
+        let camera = Camera {
+            width,
+            height,
+            fx: self.fx,
+            fy: self.fy,
+            cx: self.cx,
+            cy: self.cy,
+            depth_scale,
+        };
+        let config = Config::new(camera, preset, mode);
+        config.validate().map_err(|e| bad(e.to_string()))?;
+        let options = PipelineOptions {
+            threads,
+            admission: if self.live {
+                Admission::Live
+            } else {
+                Admission::Offline
+            },
+            geometry: self.point_cloud.then(GeometryOptions::default),
+            keep_trajectory: true,
+            ..PipelineOptions::default()
+        };
+        Ok((config, options, format, min_confidence))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn init_names_bad_fields() {
+        let good = InitArgs {
+            width: 320,
+            height: 180,
+            fx: 250.0,
+            fy: 250.0,
+            cx: 159.5,
+            cy: 89.5,
+            depth_format: 0,
+            depth_scale: 1000.0,
+            min_confidence: 0,
+            preset: 1,
+            mode: 2,
+            live: true,
+            threads: 2,
+            point_cloud: true,
+        };
+        assert!(good.build().is_ok());
+        let msg = |a: InitArgs| match a.build() {
+            Err(Failure::IllegalArgument(m)) => m,
+            other => panic!("expected IllegalArgument, got {other:?}"),
+        };
+        assert!(
+            msg(InitArgs {
+                fx: f64::NAN,
+                ..good.clone()
+            })
+            .contains("fx")
+        );
+        assert!(
+            msg(InitArgs {
+                width: 0,
+                ..good.clone()
+            })
+            .contains("width")
+        );
+        assert!(
+            msg(InitArgs {
+                mode: 3,
+                ..good.clone()
+            })
+            .contains("mode")
+        );
+        assert!(
+            msg(InitArgs {
+                preset: -1,
+                ..good.clone()
+            })
+            .contains("preset")
+        );
+        assert!(
+            msg(InitArgs {
+                depth_format: 9,
+                ..good.clone()
+            })
+            .contains("depthFormat")
+        );
+        assert!(
+            msg(InitArgs {
+                depth_format: 2,
+                depth_scale: 0.0,
+                ..good.clone()
+            })
+            .contains("depthScale")
+        );
+        assert!(
+            msg(InitArgs {
+                depth_format: 1,
+                min_confidence: 8,
+                ..good.clone()
+            })
+            .contains("minConfidence")
+        );
+        assert!(
+            msg(InitArgs {
+                threads: 0,
+                ..good.clone()
+            })
+            .contains("threads")
+        );
+        assert!(
+            msg(InitArgs {
+                threads: -3,
+                ..good
+            })
+            .contains("threads")
+        );
+    }
+}

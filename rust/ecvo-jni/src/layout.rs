@@ -1,0 +1,157 @@
+//! The numbers that cross the boundary: code tables, array layouts and conversions
+//! shared with the Kotlin side (`TrackerConfig.kt`, `TimedPose.kt`, `TrackerStats.kt`).
+
+use ecvo_core::Pose;
+use ecvo_pipeline::{CloudPoint, PipelineStats, PoseRecord};
+use jni::sys::{jint, jlong};
+
+/// What `nativeGetPose` returns when there is no pose yet (`Tracker.NO_POSE`).
+pub const NO_POSE: jlong = jlong::MIN;
+
+/// Doubles per pose in `nativeTrajectory` (`TimedPose.STRIDE`).
+pub const POSE_STRIDE: usize = 8;
+
+/// Doubles per reference in `nativeReferences` (`ReferenceFrame.STRIDE`).
+pub const REFERENCE_STRIDE: usize = 9;
+
+/// Doubles in `nativeStats` (`TrackerStats.SIZE`).
+pub const STATS_SIZE: usize = 14;
+
+/// With the `test-hooks` feature only: a push with this timestamp panics inside the
+/// native call (the misuse suite checks it becomes a `RuntimeException`).
+#[cfg(feature = "test-hooks")]
+pub const TEST_PANIC_TIMESTAMP_NS: jlong = -0x0EC0_DEAD;
+
+/// How the 16-bit depth samples encode distance (`io.ecvo.DepthFormat` codes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthFormat {
+    /// Code 0: millimetres, 0 = no measurement.
+    Millimetres,
+    /// Code 1: Android `DEPTH16` (13-bit millimetres, 3-bit confidence).
+    Depth16,
+    /// Code 2: `depthScale` units per metre.
+    CustomScale,
+}
+
+impl DepthFormat {
+    /// The format with this code.
+    pub fn from_code(code: jint) -> Option<DepthFormat> {
+        match code {
+            0 => Some(DepthFormat::Millimetres),
+            1 => Some(DepthFormat::Depth16),
+            2 => Some(DepthFormat::CustomScale),
+            _ => None,
+        }
+    }
+}
+
+/// Capture time: nanoseconds (Kotlin) to the pipeline's seconds.
+pub fn ns_to_seconds(ns: jlong) -> f64 {
+    ns as f64 / 1e9
+}
+
+/// A pose as the 16 floats `nativeGetPose` writes: 4x4 camera-to-world, column-major.
+pub fn pose_matrix(pose: &Pose) -> [f32; 16] {
+    let m = pose.to_homogeneous();
+    let mut out = [0f32; 16];
+    // nalgebra stores matrices column-major.
+    for (o, v) in out.iter_mut().zip(m.as_slice()) {
+        *o = *v as f32;
+    }
+    out
+}
+
+/// A pose record as the 8 doubles of `nativeTrajectory`: t, tx, ty, tz, qx, qy, qz, qw.
+pub fn pose_doubles(r: &PoseRecord) -> [f64; POSE_STRIDE] {
+    let t = r.pose.translation.vector;
+    let q = r.pose.rotation.quaternion();
+    [r.timestamp, t.x, t.y, t.z, q.i, q.j, q.k, q.w]
+}
+
+/// The 8 doubles per pose of the records from index `from` on (`nativeTrajectorySince`);
+/// empty when `from` is at or past the end.
+pub fn trajectory_since(records: &[PoseRecord], from: usize) -> Vec<f64> {
+    records
+        .get(from..)
+        .unwrap_or(&[])
+        .iter()
+        .flat_map(pose_doubles)
+        .collect()
+}
+
+/// The 14 doubles of `nativeStats` (layout in `TrackerStats.kt`).
+pub fn stats_doubles(s: &PipelineStats) -> [f64; STATS_SIZE] {
+    let c = &s.counters;
+    let level = |i: usize| c.references.get(i).copied().unwrap_or(0) as f64;
+    [
+        s.pushed as f64,
+        s.dropped as f64,
+        s.tracked as f64,
+        c.motion_estimations as f64,
+        level(0),
+        level(1),
+        c.lost_frames as f64,
+        c.failed_corrections as f64,
+        c.reanchors as f64,
+        s.filter.mean_ms,
+        s.tracker.mean_ms,
+        s.geometry.mean_ms,
+        s.latency.mean_ms,
+        s.wall_ms_per_frame,
+    ]
+}
+
+/// The 4 floats per point of `nativePointCloud` (x, y, z, intensity 0..1), at most
+/// `max_points` points taken evenly from the whole cloud.
+pub fn cloud_floats(points: &[CloudPoint], max_points: usize) -> Vec<f32> {
+    let n = points.len();
+    let take = n.min(max_points);
+    let mut out = Vec::with_capacity(take * 4);
+    for i in 0..take {
+        let p = &points[if take == n { i } else { i * n / take }];
+        out.extend_from_slice(&[
+            p.position[0],
+            p.position[1],
+            p.position[2],
+            f32::from(p.intensity) / 255.0,
+        ]);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pose_matrix_is_column_major() {
+        let pose = Pose::new(
+            ecvo_core::nalgebra::Vector3::new(1.0, 2.0, 3.0),
+            ecvo_core::nalgebra::Vector3::new(0.0, 0.0, std::f64::consts::FRAC_PI_2),
+        );
+        let m = pose_matrix(&pose);
+        assert_eq!(&m[12..16], &[1.0, 2.0, 3.0, 1.0]);
+        // Camera x axis (first column) points along world y after a 90 degree turn about z.
+        assert!((m[1] - 1.0).abs() < 1e-6 && m[0].abs() < 1e-6);
+        assert_eq!(m[3], 0.0);
+    }
+
+    #[test]
+    fn cloud_is_subsampled_evenly() {
+        let pts: Vec<CloudPoint> = (0..10)
+            .map(|i| CloudPoint {
+                position: [i as f32, 0.0, 0.0],
+                normal: [0.0; 3],
+                intensity: 255,
+            })
+            .collect();
+        let v = cloud_floats(&pts, 5);
+        assert_eq!(v.len(), 20);
+        assert_eq!(
+            v.chunks(4).map(|c| c[0]).collect::<Vec<_>>(),
+            [0.0, 2.0, 4.0, 6.0, 8.0]
+        );
+        assert_eq!(v[3], 1.0);
+        assert_eq!(cloud_floats(&pts, 100).len(), 40);
+    }
+}

@@ -1,0 +1,372 @@
+//! The native methods: declared once in [`bridge!`], each a thin wrapper that finds the
+//! tracker, converts its arguments and calls the engine.
+
+use ecvo_core::TrackingState;
+use jni::objects::{JByteArray, JByteBuffer, JClass, JDoubleArray, JFloatArray, JShortArray};
+use jni::sys::{jboolean, jdouble, jint, jlong};
+use jni::{Env, NativeMethod};
+
+use crate::config::InitArgs;
+use crate::error::{Failure, bad, run};
+use crate::frames::{PlaneLayout, array_len, copy_plane, direct};
+use crate::layout::trajectory_since;
+use crate::layout::{
+    NO_POSE, REFERENCE_STRIDE, cloud_floats, pose_doubles, pose_matrix, stats_doubles,
+};
+use crate::tracker::{REGISTRY, init, lock, tracker};
+
+/// Declares the native methods once: each entry becomes a `native_method!` constant
+/// (compile-time checked against its Rust function, exported under its short JNI
+/// name) and a row of [`declared_signatures`].
+macro_rules! bridge {
+    ($( $konst:ident = $export:literal, fn $name:ident $args:tt $(-> $ret:tt)?; )*) => {
+        $(
+            #[doc = concat!("The native method exported as `", $export, "`.")]
+            pub const $konst: NativeMethod<'static> = jni::native_method! {
+                java_type = "io.ecvo.NativeBridge",
+                export = $export,
+                static fn $name $args $(-> $ret)?,
+            };
+        )*
+
+        /// Every native method, e.g. for `Env::register_native_methods`.
+        pub const NATIVE_METHODS: &[NativeMethod<'static>] = &[$($konst),*];
+
+        /// `(exported symbol, JNI signature)` of every native method, from the same
+        /// declarations as [`NATIVE_METHODS`]; `tests/signatures.rs` compares them with
+        /// `NativeBridge.kt`.
+        pub fn declared_signatures() -> Vec<(&'static str, String)> {
+            vec![$(
+                ($export, jni::jni_sig!($args $(-> $ret)?).sig().to_str().into_owned()),
+            )*]
+        }
+    };
+}
+
+bridge! {
+    NATIVE_INIT = "Java_io_ecvo_NativeBridge_nativeInit",
+        fn native_init(width: jint, height: jint, fx: jdouble, fy: jdouble, cx: jdouble, cy: jdouble,
+            depth_format: jint, depth_scale: jdouble, min_confidence: jint,
+            preset: jint, mode: jint, live: jboolean, threads: jint, point_cloud: jboolean) -> jlong;
+    NATIVE_PUSH_BUFFERS = "Java_io_ecvo_NativeBridge_nativePushBuffers",
+        fn native_push_buffers(handle: jlong, timestamp_ns: jlong, depth: JByteBuffer, intensity: JByteBuffer) -> jint;
+    NATIVE_PUSH_STRIDED = "Java_io_ecvo_NativeBridge_nativePushStrided",
+        fn native_push_strided(handle: jlong, timestamp_ns: jlong, depth: JByteBuffer, depth_row_stride: jint,
+            intensity: JByteBuffer, intensity_row_stride: jint) -> jint;
+    NATIVE_PUSH_ARRAYS = "Java_io_ecvo_NativeBridge_nativePushArrays",
+        fn native_push_arrays(handle: jlong, timestamp_ns: jlong, depth: [jshort], intensity: [jbyte]) -> jint;
+    NATIVE_GET_POSE = "Java_io_ecvo_NativeBridge_nativeGetPose",
+        fn native_get_pose(handle: jlong, out: [jfloat]) -> jlong;
+    NATIVE_STATE = "Java_io_ecvo_NativeBridge_nativeState",
+        fn native_state(handle: jlong) -> jint;
+    NATIVE_FLUSH = "Java_io_ecvo_NativeBridge_nativeFlush",
+        fn native_flush(handle: jlong);
+    NATIVE_TRAJECTORY = "Java_io_ecvo_NativeBridge_nativeTrajectory",
+        fn native_trajectory(handle: jlong) -> [jdouble];
+    NATIVE_TRAJECTORY_SINCE = "Java_io_ecvo_NativeBridge_nativeTrajectorySince",
+        fn native_trajectory_since(handle: jlong, from: jint) -> [jdouble];
+    NATIVE_REFERENCES = "Java_io_ecvo_NativeBridge_nativeReferences",
+        fn native_references(handle: jlong) -> [jdouble];
+    NATIVE_STATS = "Java_io_ecvo_NativeBridge_nativeStats",
+        fn native_stats(handle: jlong) -> [jdouble];
+    NATIVE_POINT_CLOUD = "Java_io_ecvo_NativeBridge_nativePointCloud",
+        fn native_point_cloud(handle: jlong, max_points: jint) -> [jfloat];
+    NATIVE_RELEASE = "Java_io_ecvo_NativeBridge_nativeRelease",
+        fn native_release(handle: jlong);
+}
+
+fn native_init<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    width: jint,
+    height: jint,
+    fx: jdouble,
+    fy: jdouble,
+    cx: jdouble,
+    cy: jdouble,
+    depth_format: jint,
+    depth_scale: jdouble,
+    min_confidence: jint,
+    preset: jint,
+    mode: jint,
+    live: jboolean,
+    threads: jint,
+    point_cloud: jboolean,
+) -> jni::errors::Result<jlong> {
+    let args = InitArgs {
+        width,
+        height,
+        fx,
+        fy,
+        cx,
+        cy,
+        depth_format,
+        depth_scale,
+        min_confidence,
+        preset,
+        mode,
+        live,
+        threads,
+        point_cloud,
+    };
+    run(env, |_| init(&args))
+}
+
+/// Pushes one frame read from two direct buffers laid out as given.
+fn push_direct(
+    env: &Env<'_>,
+    handle: jlong,
+    timestamp_ns: jlong,
+    depth: &JByteBuffer<'_>,
+    depth_row_stride: Option<jint>,
+    intensity: &JByteBuffer<'_>,
+    intensity_row_stride: Option<jint>,
+) -> Result<jint, Failure> {
+    let t = tracker(handle)?;
+    let (w, h) = t.size();
+    let layout = |bpp: usize, stride: Option<jint>, name: &str| -> Result<PlaneLayout, Failure> {
+        match stride {
+            None => Ok(PlaneLayout::packed(w, h, bpp)),
+            Some(s) => Ok(PlaneLayout {
+                row_stride: usize::try_from(s)
+                    .map_err(|_| bad(format!("{name}: row stride {s} is negative")))?,
+                ..PlaneLayout::packed(w, h, bpp)
+            }),
+        }
+    };
+    let dl = layout(2, depth_row_stride, "depth")?;
+    let il = layout(1, intensity_row_stride, "intensity")?;
+    let d = direct(env, depth, "depth", dl)?;
+    let i = direct(env, intensity, "intensity", il)?;
+    t.push(timestamp_ns, |ib, db| {
+        copy_plane(i, il, ib);
+        // Depth is little-endian (native order on every Android ABI), row by row.
+        for (y, row) in db.chunks_exact_mut(w).enumerate() {
+            let src = &d[y * dl.row_stride..y * dl.row_stride + 2 * w];
+            for (v, b) in row.iter_mut().zip(src.chunks_exact(2)) {
+                *v = u16::from_le_bytes([b[0], b[1]]);
+            }
+        }
+        Ok(())
+    })
+}
+
+fn native_push_buffers<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    handle: jlong,
+    timestamp_ns: jlong,
+    depth: JByteBuffer<'local>,
+    intensity: JByteBuffer<'local>,
+) -> jni::errors::Result<jint> {
+    run(env, |env| {
+        push_direct(env, handle, timestamp_ns, &depth, None, &intensity, None)
+    })
+}
+
+fn native_push_strided<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    handle: jlong,
+    timestamp_ns: jlong,
+    depth: JByteBuffer<'local>,
+    depth_row_stride: jint,
+    intensity: JByteBuffer<'local>,
+    intensity_row_stride: jint,
+) -> jni::errors::Result<jint> {
+    run(env, |env| {
+        push_direct(
+            env,
+            handle,
+            timestamp_ns,
+            &depth,
+            Some(depth_row_stride),
+            &intensity,
+            Some(intensity_row_stride),
+        )
+    })
+}
+
+fn native_push_arrays<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    handle: jlong,
+    timestamp_ns: jlong,
+    depth: JShortArray<'local>,
+    intensity: JByteArray<'local>,
+) -> jni::errors::Result<jint> {
+    run(env, |env| {
+        let t = tracker(handle)?;
+        let (w, h) = t.size();
+        let n = w * h;
+        if depth.is_null() {
+            return Err(bad("depth: array is null"));
+        }
+        if intensity.is_null() {
+            return Err(bad("intensity: array is null"));
+        }
+        array_len(depth.len(env), "depth", n)?;
+        array_len(intensity.len(env), "intensity", n)?;
+        let env = &*env;
+        t.push(timestamp_ns, |ib, db| {
+            // SAFETY: u16/i16 and u8/i8 have the same size and alignment; the
+            // reinterpreted slices are only written by the JNI copy.
+            let (d, i) = unsafe {
+                (
+                    std::slice::from_raw_parts_mut(db.as_mut_ptr().cast::<i16>(), db.len()),
+                    std::slice::from_raw_parts_mut(ib.as_mut_ptr().cast::<i8>(), ib.len()),
+                )
+            };
+            depth.get_region(env, 0, d)?;
+            intensity.get_region(env, 0, i)?;
+            Ok(())
+        })
+    })
+}
+
+fn native_get_pose<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    handle: jlong,
+    out: JFloatArray<'local>,
+) -> jni::errors::Result<jlong> {
+    run(env, |env| {
+        let t = tracker(handle)?;
+        if out.is_null() {
+            return Err(bad("out: array is null"));
+        }
+        let len = out.len(env)?;
+        if len < 16 {
+            return Err(bad(format!("out: array has {len} values, a pose needs 16")));
+        }
+        let latest = t.pipeline.latest();
+        if latest.tracked == 0 {
+            return Ok(NO_POSE);
+        }
+        out.set_region(env, 0, &pose_matrix(&latest.pose))?;
+        Ok(t.stamp_ns(latest.timestamp))
+    })
+}
+
+fn native_state<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    handle: jlong,
+) -> jni::errors::Result<jint> {
+    run(env, |_| {
+        let t = tracker(handle)?;
+        let latest = t.pipeline.latest();
+        Ok(match latest.state {
+            _ if latest.tracked == 0 => 0,
+            TrackingState::Initialising => 0,
+            TrackingState::Tracking => 1,
+            TrackingState::Lost => 2,
+        })
+    })
+}
+
+fn native_flush<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    handle: jlong,
+) -> jni::errors::Result<()> {
+    run(env, |_| Ok(tracker(handle)?.pipeline.flush()?))
+}
+
+fn doubles<'local>(env: &mut Env<'local>, v: &[f64]) -> Result<JDoubleArray<'local>, Failure> {
+    let a = env.new_double_array(v.len())?;
+    a.set_region(env, 0, v)?;
+    Ok(a)
+}
+
+fn native_trajectory<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    handle: jlong,
+) -> jni::errors::Result<JDoubleArray<'local>> {
+    run(env, |env| {
+        let t = tracker(handle)?;
+        let v: Vec<f64> = t
+            .pipeline
+            .trajectory()
+            .iter()
+            .flat_map(pose_doubles)
+            .collect();
+        doubles(env, &v)
+    })
+}
+
+fn native_trajectory_since<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    handle: jlong,
+    from: jint,
+) -> jni::errors::Result<JDoubleArray<'local>> {
+    run(env, |env| {
+        let t = tracker(handle)?;
+        let from = usize::try_from(from).map_err(|_| bad(format!("from: {from} is negative")))?;
+        doubles(env, &trajectory_since(&t.pipeline.trajectory(), from))
+    })
+}
+
+fn native_references<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    handle: jlong,
+) -> jni::errors::Result<JDoubleArray<'local>> {
+    run(env, |env| {
+        let t = tracker(handle)?;
+        let refs = t.pipeline.references();
+        let mut v = Vec::with_capacity(refs.len() * REFERENCE_STRIDE);
+        for r in &refs {
+            v.extend_from_slice(&pose_doubles(r));
+            v.push(f64::from(r.reference_levels));
+        }
+        doubles(env, &v)
+    })
+}
+
+fn native_stats<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    handle: jlong,
+) -> jni::errors::Result<JDoubleArray<'local>> {
+    run(env, |env| {
+        let t = tracker(handle)?;
+        doubles(env, &stats_doubles(&t.pipeline.stats()))
+    })
+}
+
+fn native_point_cloud<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    handle: jlong,
+    max_points: jint,
+) -> jni::errors::Result<JFloatArray<'local>> {
+    run(env, |env| {
+        let t = tracker(handle)?;
+        let max = usize::try_from(max_points)
+            .map_err(|_| bad(format!("maxPoints: {max_points} is negative")))?;
+        let v = cloud_floats(&t.pipeline.cloud_snapshot(), max);
+        let a = env.new_float_array(v.len())?;
+        a.set_region(env, 0, &v)?;
+        Ok(a)
+    })
+}
+
+fn native_release<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    handle: jlong,
+) -> jni::errors::Result<()> {
+    run(env, |_| {
+        let removed = lock(&REGISTRY).remove(&handle);
+        if removed.is_some() {
+            log::info!("ecvo-jni: tracker {handle} released");
+        }
+        // The pipeline stops and joins its threads when the last `Arc` goes: here,
+        // or at the end of a call still running on another thread.
+        drop(removed);
+        Ok(())
+    })
+}
