@@ -29,6 +29,10 @@ use crate::se3;
 /// The most coarse-to-fine steps a schedule may have.
 pub const MAX_STEPS: usize = 8;
 
+/// The most initial guesses [`MotionEstimator::motion_from`] tries; further ones are
+/// ignored.
+pub const MAX_STARTS: usize = 4;
+
 /// Why a motion estimate was rejected.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Failure {
@@ -367,7 +371,8 @@ impl MotionEstimator {
     /// each, and the one whose result explains the template best (the lowest mean
     /// robust cost at a common scale, a template point that leaves the image costing
     /// as much as the worst outlier) goes on to the finer steps. Ties go to the
-    /// earlier guess. [`MotionResult::start`] says which one won.
+    /// earlier guess. [`MotionResult::start`] says which one won. At most
+    /// [`MAX_STARTS`] guesses are tried.
     pub fn motion_from(
         &mut self,
         fi: &PreparedFrame,
@@ -464,18 +469,20 @@ impl MotionEstimator {
         cfg: &MotionConfig,
         p: &Params,
     ) -> (usize, StepOutcome) {
-        let outs: Vec<StepOutcome> = inits
-            .iter()
-            .map(|init| self.run_step(level, points, init.inverse(), step, cfg, p, None))
-            .collect();
+        // On the stack: a warm estimator does not allocate.
+        let mut slots: [Option<StepOutcome>; MAX_STARTS] = [None; MAX_STARTS];
+        for (slot, init) in slots.iter_mut().zip(inits) {
+            *slot = Some(self.run_step(level, points, init.inverse(), step, cfg, p, None));
+        }
+        let outs = slots.iter().flatten();
         // A common scale: the first guess's (the identity's, for [A]).
-        let Some(common) = outs.iter().find_map(|o| o.scale) else {
-            return (0, outs[0]);
+        let Some(common) = outs.clone().find_map(|o| o.scale) else {
+            return (0, slots[0].expect("at least one start"));
         };
         let wh = common.whitener(p.nu);
         let total = points.len().max(1) as f64;
         let mut best = (0, f64::INFINITY);
-        for (k, o) in outs.iter().enumerate() {
+        for (k, o) in outs.enumerate() {
             if o.ne.is_none() {
                 continue;
             }
@@ -487,7 +494,7 @@ impl MotionEstimator {
                 best = (k, c);
             }
         }
-        (best.0, outs[best.0])
+        (best.0, slots[best.0].expect("the best start ran"))
     }
 
     /// One coarse-to-fine step: Gauss-Newton from `t` with the scale re-fitted after
