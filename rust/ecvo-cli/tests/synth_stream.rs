@@ -167,25 +167,50 @@ fn eval_of_the_written_trajectory_agrees_with_the_summary() {
 }
 
 #[test]
-fn table_prints_the_three_rows() {
+fn table_prints_the_three_rows_per_frame_step() {
     let seq = testdata_stream();
-    let o = run_ok(&["table", seq.to_str().unwrap(), "--max-frames", "20"]);
+    let json = temp_dir("table_rows").join("rows.jsonl");
+    let o = run_ok(&[
+        "table",
+        seq.to_str().unwrap(),
+        "--max-frames",
+        "20",
+        "--frame-steps",
+        "1,2",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
     let text = String::from_utf8(o.stdout).unwrap();
     assert!(
         text.contains(
-            "| method | ATE RMSE (m) | motion estimations | references L1/L2 | ms per frame |"
+            "| frame step | frames | method | ATE RMSE (m) | motion estimations | references L1/L2 | ms per frame |"
         ),
         "{text}"
     );
-    for row in ["| naive |", "| L1 |", "| L2 |"] {
-        assert_eq!(
-            text.lines().filter(|l| l.starts_with(row)).count(),
-            1,
-            "{text}"
-        );
+    for step in [1, 2] {
+        for m in ["naive", "L1", "L2"] {
+            // --max-frames counts tracked frames: 20 at either step.
+            let row = format!("| {step} | 20 | {m} |");
+            assert_eq!(
+                text.lines().filter(|l| l.starts_with(&row)).count(),
+                1,
+                "{row} in {text}"
+            );
+        }
     }
-    let naive = text.lines().find(|l| l.starts_with("| naive |")).unwrap();
+    // Naive tracking of 20 frames: 19 MOTION calls, no references.
+    let naive = text.lines().find(|l| l.starts_with("| 1 | 20 | naive |")).unwrap();
     assert!(naive.contains("| 19 | - |"), "{naive}");
+    // One JSON object per row.
+    let rows: Vec<serde_json::Value> = std::fs::read_to_string(&json)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(rows.len(), 6);
+    assert_eq!(rows[3]["frame_step"], 2);
+    assert_eq!(rows[3]["frames"], 20);
+    assert!(rows.iter().all(|r| r["ate_rmse_m"].as_f64().is_some_and(|a| a < 0.05)));
 }
 
 /// Checks the files of an `ecvo run` output folder against its summary.
