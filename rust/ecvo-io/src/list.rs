@@ -75,18 +75,26 @@ impl Monotonic {
 }
 
 /// One entry of a TUM image list: `timestamp filename`.
-pub(crate) struct ListEntry {
+#[derive(Clone, Debug, PartialEq)]
+pub struct ListEntry {
+    /// Timestamp in seconds.
     pub timestamp: f64,
+    /// File name, relative to the list's folder.
     pub file: String,
 }
 
 /// Reads a TUM image list (`rgb.txt`, `depth.txt`): `timestamp filename` per line,
 /// `#` comments and blank lines allowed, timestamps strictly increasing.
 pub(crate) fn read_image_list(path: &Path) -> Result<Vec<ListEntry>> {
-    let text = read_text(path)?;
+    parse_image_list(&read_text(path)?, path)
+}
+
+/// Parses the text of a TUM image list (see `read_image_list`); `path` is only used
+/// in error messages.
+pub fn parse_image_list(text: &str, path: &Path) -> Result<Vec<ListEntry>> {
     let mut out = Vec::new();
     let mut mono = Monotonic::default();
-    for r in records(&text) {
+    for r in records(text) {
         if r.fields.len() != 2 {
             return Err(Error::parse(
                 path,
