@@ -35,7 +35,11 @@ fn frames(u: &mut Unstructured<'_>) -> Result<Frames> {
         cy: finite(u, -100.0, 100.0)?,
         depth_scale: finite(u, 1e-3, 1e5)?,
     };
-    let preset = if u.arbitrary()? { Preset::Pc } else { Preset::Phone };
+    let preset = if u.arbitrary()? {
+        Preset::Pc
+    } else {
+        Preset::Phone
+    };
     let mode = match u.int_in_range(0..=2)? {
         0 => Mode::Naive,
         1 => Mode::L1,
