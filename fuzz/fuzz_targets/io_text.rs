@@ -1,11 +1,12 @@
 //! The text parsers of ecvo-io: camera.json, TUM image lists, ICL-NUIM
-//! associations.txt and TUM trajectories. The first byte picks the parser.
+//! associations.txt, TUM trajectories, and the nearest-timestamp association of two
+//! image lists. The first byte picks the parser.
 #![no_main]
 
 use std::path::Path;
 
 use ecvo_io::camera::parse_camera_json;
-use ecvo_io::{Trajectory, parse_associations, parse_image_list};
+use ecvo_io::{Trajectory, associate_stamps, parse_associations, parse_image_list};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
@@ -16,7 +17,7 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     let path = Path::new("fuzz.txt");
-    match which % 4 {
+    match which % 5 {
         0 => {
             if let Ok(c) = parse_camera_json(text, path) {
                 // What the parser accepts, the core accepts.
@@ -37,6 +38,26 @@ fuzz_target!(|data: &[u8]| {
                 for w in frames.windows(2) {
                     assert!(w[0].timestamp < w[1].timestamp);
                 }
+            }
+        }
+        4 => {
+            // Two lists separated by a blank line `---`, paired as Sequence::open pairs
+            // rgb.txt and depth.txt: one-to-one, within max_dt.
+            let (x, y) = text.split_once("---").unwrap_or((text, text));
+            let (Ok(x), Ok(y)) = (parse_image_list(x, path), parse_image_list(y, path)) else {
+                return;
+            };
+            let a: Vec<f64> = x.iter().map(|e| e.timestamp).collect();
+            let b: Vec<f64> = y.iter().map(|e| e.timestamp).collect();
+            let pairs = associate_stamps(&a, &b, 0.02);
+            let mut used = vec![false; b.len()];
+            for w in pairs.windows(2) {
+                assert!(w[0].0 < w[1].0);
+            }
+            for &(i, j) in &pairs {
+                assert!((a[i] - b[j]).abs() < 0.02);
+                assert!(!used[j]);
+                used[j] = true;
             }
         }
         _ => {
