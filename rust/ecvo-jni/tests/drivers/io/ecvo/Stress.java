@@ -100,13 +100,14 @@ public final class Stress {
             case "trajectory": NativeBridge.nativeTrajectory(h); return false;
             case "references": NativeBridge.nativeReferences(h); return false;
             case "stats": NativeBridge.nativeStats(h); return false;
-            case "pointCloud": NativeBridge.nativePointCloud(h, r.nextInt(-5, 5000)); return false;
+            case "pointCloud": NativeBridge.nativePointCloud(h, r.nextInt(0, 5000)); return false;
             case "badInput": {
-                switch (r.nextInt(5)) {
+                switch (r.nextInt(6)) {
                     case 0: NativeBridge.nativePushArrays(h, 1, new short[7], new byte[7]); break;
                     case 1: NativeBridge.nativePushBuffers(h, 1, null, f.intensityBuffers.get(0)); break;
                     case 2: NativeBridge.nativePushBuffers(h, 1, ByteBuffer.allocate(2 * f.width * f.height), f.intensityBuffers.get(0)); break;
                     case 3: NativeBridge.nativeGetPose(h, new float[4]); break;
+                    case 4: NativeBridge.nativePointCloud(h, -1 - r.nextInt(5)); break;
                     default: NativeBridge.nativeRelease(NativeBridge.nativeInit(-1, 180, 1, 1, 0, 0, 0, 1000, 0, 0, 0, true, 1));
                 }
                 return true;
