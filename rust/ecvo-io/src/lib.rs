@@ -28,10 +28,10 @@ pub mod writer;
 pub use camera::{CameraPreset, load_camera_json, save_camera_json};
 pub use datasets::{dataset, dataset_for_test, datasets_dir};
 pub use error::{Error, Result};
-pub use list::associate_stamps;
+pub use list::{ListEntry, associate_stamps, parse_image_list};
 pub use ply::write_ply;
 pub use reader::FrameReader;
-pub use sequence::{Frame, FrameInfo, Layout, Sequence};
+pub use sequence::{Frame, FrameInfo, Layout, Sequence, parse_associations};
 pub use trajectory::Trajectory;
 pub use writer::SequenceWriter;
 

@@ -75,18 +75,26 @@ impl Monotonic {
 }
 
 /// One entry of a TUM image list: `timestamp filename`.
-pub(crate) struct ListEntry {
+#[derive(Clone, Debug, PartialEq)]
+pub struct ListEntry {
+    /// Timestamp in seconds.
     pub timestamp: f64,
+    /// File name, relative to the list's folder.
     pub file: String,
 }
 
 /// Reads a TUM image list (`rgb.txt`, `depth.txt`): `timestamp filename` per line,
 /// `#` comments and blank lines allowed, timestamps strictly increasing.
 pub(crate) fn read_image_list(path: &Path) -> Result<Vec<ListEntry>> {
-    let text = read_text(path)?;
+    parse_image_list(&read_text(path)?, path)
+}
+
+/// Parses the text of a TUM image list (see `read_image_list`); `path` is only used
+/// in error messages.
+pub fn parse_image_list(text: &str, path: &Path) -> Result<Vec<ListEntry>> {
     let mut out = Vec::new();
     let mut mono = Monotonic::default();
-    for r in records(&text) {
+    for r in records(text) {
         if r.fields.len() != 2 {
             return Err(Error::parse(
                 path,
@@ -107,10 +115,19 @@ pub(crate) fn read_image_list(path: &Path) -> Result<Vec<ListEntry>> {
     Ok(out)
 }
 
+/// Candidates a timestamp of `first` considers on each side of its position among the
+/// timestamps of `second` (see [`associate_stamps`]).
+pub const MAX_CANDIDATES_PER_SIDE: usize = 8;
+
 /// Pairs timestamps of `first` and `second` one-to-one, the way TUM's `associate.py`
 /// does: every pair with `|a - b| < max_dt` is a candidate, candidates are taken
 /// greedily by increasing `|a - b|` (ties by index), each index at most once, and
 /// the result is sorted by the index into `first`.
+///
+/// Unlike `associate.py`, a timestamp of `first` considers only the
+/// [`MAX_CANDIDATES_PER_SIDE`] nearest timestamps of `second` on each side of it (real
+/// streams have one or two within `max_dt`), so that hostile lists with thousands of
+/// timestamps within `max_dt` cost linear memory instead of quadratic.
 pub fn associate_stamps(first: &[f64], second: &[f64], max_dt: f64) -> Vec<(usize, usize)> {
     let mut order: Vec<usize> = (0..second.len())
         .filter(|&j| second[j].is_finite())
@@ -124,7 +141,10 @@ pub fn associate_stamps(first: &[f64], second: &[f64], max_dt: f64) -> Vec<(usiz
             continue;
         }
         let start = sorted.partition_point(|&b| b <= a - max_dt);
-        for (k, &b) in sorted.iter().enumerate().skip(start) {
+        let mid = sorted.partition_point(|&b| b < a).max(start);
+        let from = start.max(mid.saturating_sub(MAX_CANDIDATES_PER_SIDE));
+        let to = (mid + MAX_CANDIDATES_PER_SIDE).min(sorted.len());
+        for (k, &b) in sorted.iter().enumerate().take(to).skip(from) {
             let d = (a - b).abs();
             if b - a >= max_dt {
                 break;

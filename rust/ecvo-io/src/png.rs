@@ -3,7 +3,7 @@
 
 use std::cell::RefCell;
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Write};
+use std::io::{BufRead, BufReader, BufWriter, Cursor, Seek, Write};
 use std::path::Path;
 
 use image::codecs::png::{CompressionType, FilterType, PngDecoder, PngEncoder};
@@ -33,11 +33,19 @@ fn describe(c: ColorType) -> &'static str {
 
 fn open(path: &Path) -> Result<PngDecoder<BufReader<File>>> {
     let file = File::open(path).map_err(|e| Error::io(path, e))?;
-    PngDecoder::new(BufReader::new(file))
-        .map_err(|e| Error::image(path, format!("cannot decode PNG: {e}")))
+    decoder(BufReader::new(file), path)
 }
 
-fn check_size(path: &Path, dec: &PngDecoder<BufReader<File>>, w: usize, h: usize) -> Result<()> {
+fn decoder<R: BufRead + Seek>(reader: R, path: &Path) -> Result<PngDecoder<R>> {
+    PngDecoder::new(reader).map_err(|e| Error::image(path, format!("cannot decode PNG: {e}")))
+}
+
+fn check_size<R: BufRead + Seek>(
+    path: &Path,
+    dec: &PngDecoder<R>,
+    w: usize,
+    h: usize,
+) -> Result<()> {
     let (fw, fh) = dec.dimensions();
     if (fw as usize, fh as usize) != (w, h) {
         return Err(Error::ImageSize {
@@ -55,6 +63,13 @@ fn check_size(path: &Path, dec: &PngDecoder<BufReader<File>>, w: usize, h: usize
 pub fn png_size(path: impl AsRef<Path>) -> Result<(usize, usize)> {
     let path = path.as_ref();
     let (w, h) = open(path)?.dimensions();
+    Ok((w as usize, h as usize))
+}
+
+/// Width and height of a PNG held in memory, from its header only; `path` is only
+/// used in error messages.
+pub fn png_size_of(bytes: &[u8], path: &Path) -> Result<(usize, usize)> {
+    let (w, h) = decoder(Cursor::new(bytes), path)?.dimensions();
     Ok((w as usize, h as usize))
 }
 
@@ -76,7 +91,28 @@ pub fn read_intensity_png(
     out: &mut Vec<u8>,
 ) -> Result<()> {
     let path = path.as_ref();
-    let dec = open(path)?;
+    intensity_from(open(path)?, path, width, height, out)
+}
+
+/// [`read_intensity_png`] on the bytes of a PNG file held in memory; `path` is only
+/// used in error messages.
+pub fn decode_intensity_png(
+    bytes: &[u8],
+    path: &Path,
+    width: usize,
+    height: usize,
+    out: &mut Vec<u8>,
+) -> Result<()> {
+    intensity_from(decoder(Cursor::new(bytes), path)?, path, width, height, out)
+}
+
+fn intensity_from<R: BufRead + Seek>(
+    dec: PngDecoder<R>,
+    path: &Path,
+    width: usize,
+    height: usize,
+    out: &mut Vec<u8>,
+) -> Result<()> {
     check_size(path, &dec, width, height)?;
     let n = width * height;
     let ct = dec.color_type();
@@ -118,7 +154,28 @@ pub fn read_depth_png(
     out: &mut Vec<u16>,
 ) -> Result<()> {
     let path = path.as_ref();
-    let dec = open(path)?;
+    depth_from(open(path)?, path, width, height, out)
+}
+
+/// [`read_depth_png`] on the bytes of a PNG file held in memory; `path` is only used
+/// in error messages.
+pub fn decode_depth_png(
+    bytes: &[u8],
+    path: &Path,
+    width: usize,
+    height: usize,
+    out: &mut Vec<u16>,
+) -> Result<()> {
+    depth_from(decoder(Cursor::new(bytes), path)?, path, width, height, out)
+}
+
+fn depth_from<R: BufRead + Seek>(
+    dec: PngDecoder<R>,
+    path: &Path,
+    width: usize,
+    height: usize,
+    out: &mut Vec<u16>,
+) -> Result<()> {
     check_size(path, &dec, width, height)?;
     let ct = dec.color_type();
     if ct != ColorType::L16 {

@@ -272,10 +272,40 @@ fn open_tum(dir: &Path) -> Result<Opened> {
 
 fn open_icl(dir: &Path) -> Result<Opened> {
     let path = dir.join("associations.txt");
-    let text = read_text(&path)?;
+    let frames = parse_associations(&read_text(&path)?, &path, dir)?;
+    let mut gts: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| Error::io(dir, e))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.is_file()
+                && p.file_name()
+                    .and_then(|n| n.to_str())
+                    .is_some_and(|n| n.ends_with(".gt.freiburg"))
+        })
+        .collect();
+    gts.sort();
+    if gts.len() > 1 {
+        log::warn!(
+            "{}: several *.gt.freiburg files, using {}",
+            dir.display(),
+            gts[0].display()
+        );
+    }
+    let gt = match gts.first() {
+        Some(p) => Some(Trajectory::read_tum(p)?),
+        None => None,
+    };
+    Ok((frames, gt))
+}
+
+/// Parses an ICL-NUIM `associations.txt` (`id depth/id.png id rgb/id.png` per line,
+/// ids strictly increasing) into frames whose files are in `dir`; `path` is only used
+/// in error messages.
+pub fn parse_associations(text: &str, path: &Path, dir: &Path) -> Result<Vec<FrameInfo>> {
+    let path = path.to_path_buf();
     let mut frames = Vec::new();
     let mut mono = Monotonic::default();
-    for r in records(&text) {
+    for r in records(text) {
         if r.fields.len() != 4 {
             return Err(Error::parse(
                 &path,
@@ -303,27 +333,5 @@ fn open_icl(dir: &Path) -> Result<Opened> {
             );
         }
     }
-    let mut gts: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map_err(|e| Error::io(dir, e))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.is_file()
-                && p.file_name()
-                    .and_then(|n| n.to_str())
-                    .is_some_and(|n| n.ends_with(".gt.freiburg"))
-        })
-        .collect();
-    gts.sort();
-    if gts.len() > 1 {
-        log::warn!(
-            "{}: several *.gt.freiburg files, using {}",
-            dir.display(),
-            gts[0].display()
-        );
-    }
-    let gt = match gts.first() {
-        Some(p) => Some(Trajectory::read_tum(p)?),
-        None => None,
-    };
-    Ok((frames, gt))
+    Ok(frames)
 }

@@ -1,0 +1,91 @@
+package io.ecvo;
+
+import java.io.File;
+import java.util.Locale;
+import java.util.Random;
+
+/**
+ * Fault injection through JNI: one offline tracker per fault; 20 good frames, 5 faulty
+ * ones, then good frames again, with a flush and nativeState after every push.
+ * Prints, per fault, after how many faulty frames the state said lost (or the push
+ * threw) and after how many good frames it said tracking again, and checks that every
+ * pose stays finite. Exit status 1 if a pose is not finite, a push threw something
+ * undocumented, or a covered lens / wrong-size frame is not flagged at once.
+ *
+ * java -Xcheck:jni -Djava.library.path=target/release -cp CLASSES io.ecvo.JniFaults DATA_DIR
+ */
+public final class JniFaults {
+    static final int GOOD = 20, BAD = 5, AFTER = 25;
+
+    public static void main(String[] args) throws Exception {
+        Locale.setDefault(Locale.ROOT);
+        Frames f = new Frames(new File(args[0]));
+        String[] faults = {"covered lens", "black intensity", "garbage depth", "frozen frame", "duplicated timestamps",
+            "backwards timestamps", "wrong frame size"};
+        boolean ok = true;
+        System.out.println("| fault (JNI, offline) | detected after | recovered after | states (20 good, 5 faulty, good) | poses finite |");
+        System.out.println("|---|---|---|---|---|");
+        for (String fault : faults) {
+            long h = NativeBridge.nativeInit(f.width, f.height, f.fx, f.fy, f.cx, f.cy, 0, 1000.0, 0, 1, 2, false, 2);
+            Random rnd = new Random(7);
+            StringBuilder states = new StringBuilder();
+            Integer detected = null, recovered = null;
+            boolean finite = true;
+            int run = 0;
+            long lastTs = 0;
+            float[] m = new float[16];
+            for (int k = 0; k < GOOD + BAD + AFTER; k++) {
+                boolean faulty = k >= GOOD && k < GOOD + BAD;
+                int i = f.pingPong(k);
+                short[] d = f.depth.get(i).clone();
+                byte[] g = f.intensity.get(i).clone();
+                long ts = k * 33_333_333L;
+                boolean threw = false;
+                if (faulty) {
+                    switch (fault) {
+                        case "covered lens": java.util.Arrays.fill(d, (short) 0); java.util.Arrays.fill(g, (byte) 0); break;
+                        case "black intensity": java.util.Arrays.fill(g, (byte) 0); break;
+                        case "garbage depth": for (int p = 0; p < d.length; p++) { d[p] = (short) rnd.nextInt(); g[p] = (byte) rnd.nextInt(); } break;
+                        case "frozen frame": d = f.depth.get(f.pingPong(GOOD - 1)).clone(); g = f.intensity.get(f.pingPong(GOOD - 1)).clone(); break;
+                        case "duplicated timestamps": ts = lastTs; break;
+                        case "backwards timestamps": ts = (GOOD - 1 - (k - GOOD + 1)) * 33_333_333L; break;
+                        case "wrong frame size": d = new short[d.length / 4]; g = new byte[g.length / 4]; break;
+                        default: throw new AssertionError(fault);
+                    }
+                }
+                try {
+                    NativeBridge.nativePushArrays(h, ts, d, g);
+                } catch (IllegalArgumentException e) {
+                    threw = true;
+                } catch (Throwable e) {
+                    System.out.println("undocumented exception: " + e);
+                    ok = false;
+                    threw = true;
+                }
+                lastTs = ts;
+                NativeBridge.nativeFlush(h);
+                int st = NativeBridge.nativeState(h);
+                long pts = NativeBridge.nativeGetPose(h, m);
+                if (pts != Long.MIN_VALUE) for (float v : m) finite &= Float.isFinite(v);
+                boolean flagged = threw || st == 2;
+                states.append(threw ? 'X' : st == 2 ? 'L' : st == 1 ? 'T' : 'I');
+                if (faulty && flagged && detected == null) detected = k - GOOD + 1;
+                if (k >= GOOD + BAD) {
+                    run = flagged ? 0 : run + 1;
+                    if (run == 5 && recovered == null) recovered = k - 4 - (GOOD + BAD) + 1;
+                }
+            }
+            for (double v : NativeBridge.nativeTrajectory(h)) finite &= Double.isFinite(v);
+            NativeBridge.nativeRelease(h);
+            String st = states.toString();
+            System.out.printf("| %s | %s | %s | `%s %s %s` | %s |%n", fault, detected == null ? "never" : detected,
+                    recovered == null ? "never" : recovered, st.substring(0, GOOD), st.substring(GOOD, GOOD + BAD),
+                    st.substring(GOOD + BAD), finite ? "yes" : "NO");
+            ok &= finite;
+            if (fault.equals("covered lens") || fault.equals("wrong frame size")) ok &= detected != null && detected == 1;
+        }
+        System.out.println("states: T tracking, L lost, X push threw IllegalArgumentException, I initialising");
+        System.out.println(ok ? "JNI FAULTS PASSED" : "JNI FAULTS FAILED");
+        System.exit(ok ? 0 : 1);
+    }
+}

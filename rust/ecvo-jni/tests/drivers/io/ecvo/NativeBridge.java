@@ -1,0 +1,30 @@
+package io.ecvo;
+
+import java.nio.ByteBuffer;
+
+/**
+ * A Java twin of android-app's Kotlin {@code io.ecvo.NativeBridge} (same class name,
+ * same static native methods, hence the same JNI symbols) for the soak and stress
+ * drivers, which run on a bare JVM without kotlinc. The signatures are checked
+ * against the Rust declarations by {@code Drivers.checkSignatures}.
+ */
+public final class NativeBridge {
+    static {
+        System.loadLibrary("ecvo_jni");
+    }
+
+    private NativeBridge() {}
+
+    public static native long nativeInit(int width, int height, double fx, double fy, double cx, double cy,
+            int depthFormat, double depthScale, int minConfidence, int preset, int mode, boolean live, int threads);
+    public static native int nativePushBuffers(long handle, long timestampNs, ByteBuffer depth, ByteBuffer intensity);
+    public static native int nativePushArrays(long handle, long timestampNs, short[] depth, byte[] intensity);
+    public static native long nativeGetPose(long handle, float[] out);
+    public static native int nativeState(long handle);
+    public static native void nativeFlush(long handle);
+    public static native double[] nativeTrajectory(long handle);
+    public static native double[] nativeReferences(long handle);
+    public static native double[] nativeStats(long handle);
+    public static native float[] nativePointCloud(long handle, int maxPoints);
+    public static native void nativeRelease(long handle);
+}

@@ -1,0 +1,36 @@
+package io.ecvo;
+
+import java.io.File;
+import java.io.IOException;
+import java.nio.file.Files;
+
+/** This process's resident memory, threads and file descriptors, from /proc/self. */
+final class Proc {
+    private Proc() {}
+
+    static long rssKb() {
+        try {
+            for (String l : Files.readAllLines(new File("/proc/self/status").toPath())) {
+                if (l.startsWith("VmRSS:")) return Long.parseLong(l.replaceAll("[^0-9]", ""));
+            }
+        } catch (IOException e) {
+            return -1;
+        }
+        return -1;
+    }
+
+    static int threads() {
+        String[] t = new File("/proc/self/task").list();
+        return t == null ? -1 : t.length;
+    }
+
+    static int fds() {
+        String[] f = new File("/proc/self/fd").list();
+        return f == null ? -1 : f.length;
+    }
+
+    static long heapUsedKb() {
+        Runtime r = Runtime.getRuntime();
+        return (r.totalMemory() - r.freeMemory()) / 1024;
+    }
+}

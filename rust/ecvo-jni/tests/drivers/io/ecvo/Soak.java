@@ -1,0 +1,158 @@
+package io.ecvo;
+
+import java.io.File;
+import java.util.Arrays;
+import java.util.Locale;
+import java.util.concurrent.atomic.AtomicBoolean;
+import java.util.concurrent.atomic.AtomicLong;
+
+/**
+ * Soak: FRAMES frames (default 100,000) at 320x180 pushed through libecvo_jni in live
+ * mode from one thread (direct buffers, as the app does), at most RATE per second,
+ * while a UI-like reader thread polls the pose and state every 16 ms and the
+ * trajectory, statistics and point cloud every second. Prints RSS, JVM heap, threads
+ * and file descriptors every REPORT frames, then latency percentiles and a verdict.
+ *
+ * java -Djava.library.path=target/release -cp CLASSES io.ecvo.Soak DATA_DIR [FRAMES] [RATE] [REPORT] [WARMUP]
+ */
+public final class Soak {
+    public static void main(String[] args) throws Exception {
+        Locale.setDefault(Locale.ROOT);
+        Frames f = new Frames(new File(args[0]));
+        long frames = args.length > 1 ? Long.parseLong(args[1]) : 100_000;
+        double rate = args.length > 2 ? Double.parseDouble(args[2]) : 300;
+        long report = args.length > 3 ? Long.parseLong(args[3]) : 5_000;
+        // Warm-up: until the geometry stage's cloud is full (500,000 points; about 35,000
+        // frames of this stream at 300 pushed/s), whose reserved pages are touched as it
+        // fills, plus the allocator settling on the largest snapshot copies.
+        long warmup = args.length > 4 ? Long.parseLong(args[4]) : Math.min(40_000, frames / 2);
+
+        int threads0 = Proc.threads(), fds0 = Proc.fds();
+        long handle = NativeBridge.nativeInit(f.width, f.height, f.fx, f.fy, f.cx, f.cy,
+                0, 1000.0, 0, 1, 2, true, 2);
+        AtomicBoolean done = new AtomicBoolean(false);
+        AtomicLong polls = new AtomicLong(), trajectoryPolls = new AtomicLong(), maxTrajectory = new AtomicLong();
+        long[] poseNs = new long[4_000_000];
+        AtomicLong poseCount = new AtomicLong();
+        Throwable[] readerError = new Throwable[1];
+        Thread reader = new Thread(() -> {
+            float[] m = new float[16];
+            long lastSlow = System.nanoTime();
+            try {
+                while (!done.get()) {
+                    long t0 = System.nanoTime();
+                    long ts = NativeBridge.nativeGetPose(handle, m);
+                    int state = NativeBridge.nativeState(handle);
+                    long dt = System.nanoTime() - t0;
+                    long i = poseCount.getAndIncrement();
+                    if (i < poseNs.length) poseNs[(int) i] = dt;
+                    if (ts != Long.MIN_VALUE) {
+                        for (float v : m) if (!Float.isFinite(v)) throw new AssertionError("non-finite pose " + Arrays.toString(m));
+                    }
+                    if (state < 0 || state > 2) throw new AssertionError("state " + state);
+                    polls.incrementAndGet();
+                    if (System.nanoTime() - lastSlow > 1_000_000_000L) {
+                        lastSlow = System.nanoTime();
+                        double[] traj = NativeBridge.nativeTrajectory(handle);
+                        maxTrajectory.set(traj.length / 8);
+                        NativeBridge.nativeStats(handle);
+                        NativeBridge.nativePointCloud(handle, 2000);
+                        trajectoryPolls.incrementAndGet();
+                    }
+                    Thread.sleep(16);
+                }
+            } catch (Throwable e) {
+                readerError[0] = e;
+            }
+        }, "ui-reader");
+        reader.start();
+
+        long[] pushNs = new long[(int) frames];
+        long start = System.nanoTime();
+        long rssWarm = -1, heapWarm = -1, cloudWarm = 0, trackedWarm = 0, cloudEnd = 0;
+        int threadsWarm = -1, fdsWarm = -1;
+        long rssMin = Long.MAX_VALUE, rssMax = 0;
+        System.out.println("frames\tseconds\tRSS_MB\theap_MB\tthreads\tfds\ttracked\tdropped\tlost\treanchors\ttrajectory\tcloud");
+        for (long k = 0; k < frames; k++) {
+            int i = f.pingPong(k);
+            long ts = k * 33_333_333L;
+            long t0 = System.nanoTime();
+            NativeBridge.nativePushBuffers(handle, ts, f.depthBuffers.get(i), f.intensityBuffers.get(i));
+            long t1 = System.nanoTime();
+            pushNs[(int) k] = t1 - t0;
+            // Pace: no faster than RATE frames per second.
+            long due = start + (long) ((k + 1) * 1e9 / rate);
+            long wait = due - System.nanoTime();
+            if (wait > 0) Thread.sleep(wait / 1_000_000, (int) (wait % 1_000_000));
+            if ((k + 1) % report == 0 || k + 1 == frames || k + 1 == warmup) {
+                double[] s = NativeBridge.nativeStats(handle);
+                long cloud = NativeBridge.nativePointCloud(handle, Integer.MAX_VALUE).length / 4;
+                cloudEnd = cloud;
+                long rss = Proc.rssKb();
+                if (k + 1 == warmup) {
+                    cloudWarm = cloud; trackedWarm = (long) s[2];
+                    rssWarm = rss; heapWarm = Proc.heapUsedKb(); threadsWarm = Proc.threads(); fdsWarm = Proc.fds();
+                }
+                if (k + 1 >= warmup) { rssMin = Math.min(rssMin, rss); rssMax = Math.max(rssMax, rss); }
+                System.out.printf("%d\t%.1f\t%.2f\t%.1f\t%d\t%d\t%.0f\t%.0f\t%.0f\t%.0f\t%d\t%d%n", k + 1,
+                        (System.nanoTime() - start) / 1e9, rss / 1024.0, Proc.heapUsedKb() / 1024.0,
+                        Proc.threads(), Proc.fds(), s[2], s[1], s[6], s[8], maxTrajectory.get(), cloud);
+            }
+        }
+        NativeBridge.nativeFlush(handle);
+        double[] s = NativeBridge.nativeStats(handle);
+        long rssEnd = Proc.rssKb();
+        int threadsEnd = Proc.threads(), fdsEnd = Proc.fds();
+        done.set(true);
+        reader.join();
+        double[] traj = NativeBridge.nativeTrajectory(handle);
+        NativeBridge.nativeRelease(handle);
+        Thread.sleep(200);
+        int threadsAfter = Proc.threads(), fdsAfter = Proc.fds();
+
+        long[] p = Arrays.copyOf(pushNs, (int) frames);
+        Arrays.sort(p);
+        int pc = (int) Math.min(poseCount.get(), poseNs.length);
+        long[] q = Arrays.copyOf(poseNs, pc);
+        Arrays.sort(q);
+        double secs = (System.nanoTime() - start) / 1e9;
+        System.out.printf("%n%d frames in %.1f s (%.0f pushed/s); tracked %.0f, dropped %.0f, lost %.0f, re-anchors %.0f%n",
+                frames, secs, frames / secs, s[2], s[1], s[6], s[8]);
+        System.out.printf("push call (ms): p50 %.3f p95 %.3f p99 %.3f max %.3f%n", pct(p, .5), pct(p, .95), pct(p, .99), p[p.length - 1] / 1e6);
+        System.out.printf("getPose+state (ms, %d polls, %d trajectory polls): p50 %.3f p95 %.3f p99 %.3f max %.3f%n",
+                polls.get(), trajectoryPolls.get(), pct(q, .5), pct(q, .95), pct(q, .99), q.length == 0 ? 0 : q[q.length - 1] / 1e6);
+        System.out.printf("push-to-pose latency (pipeline, mean ms): %.2f; filter %.2f, tracker %.2f ms/frame%n", s[12], s[9], s[10]);
+        // Growth by design, which the soak accounts for: the JNI tracker keeps every
+        // tracked frame's pose for nativeTrajectory (a PoseRecord of 88 bytes in a Vec),
+        // and each nativeTrajectory call copies it (88 bytes a frame) and converts it
+        // (64 bytes a frame): the allocator keeps heap pages as large as those copies.
+        // Before warm-up ends, the cloud (500,000 points reserved) also fills.
+        long trackedEnd = traj.length / 8;
+        double trajMb = (trackedEnd - trackedWarm) * 240 / 1048576.0;
+        System.out.printf("RSS after warm-up (%d frames) %.2f MB, at the end %.2f MB: %+.2f MB (min %.2f, max %.2f after warm-up)%n",
+                warmup, rssWarm / 1024.0, rssEnd / 1024.0, (rssEnd - rssWarm) / 1024.0, rssMin / 1024.0, rssMax / 1024.0);
+        System.out.printf("trajectory %d -> %d poses (at most %.2f MB with its copies), cloud %d -> %d points%n",
+                trackedWarm, trackedEnd, trajMb, cloudWarm, cloudEnd);
+        System.out.printf("JVM heap used after warm-up %.1f MB, at the end %.1f MB%n", heapWarm / 1024.0, Proc.heapUsedKb() / 1024.0);
+        System.out.printf("threads: before init %d, after warm-up %d, at the end %d, after release %d; fds: %d, %d, %d, %d%n",
+                threads0, threadsWarm, threadsEnd, threadsAfter, fds0, fdsWarm, fdsEnd, fdsAfter);
+        boolean ok = readerError[0] == null && threadsEnd == threadsWarm && fdsEnd == fdsWarm
+                && threadsAfter <= threads0 && fdsAfter <= fds0;
+        if (readerError[0] != null) readerError[0].printStackTrace(System.out);
+        double growthMb = (rssEnd - rssWarm) / 1024.0;
+        System.out.printf("RSS growth after warm-up beyond the trajectory: %.2f MB (limit 1 MB)%n", growthMb - trajMb);
+        ok &= growthMb - trajMb <= 1.0;
+        System.out.println(ok ? "SOAK PASSED" : "SOAK FAILED");
+        System.exit(ok ? 0 : 1);
+    }
+
+    /** Capacity of a Vec grown by doubling to hold n items. */
+    private static long cap(long n) {
+        return n <= 4 ? 4 : Long.highestOneBit(n - 1) * 2;
+    }
+
+    private static double pct(long[] sorted, double q) {
+        if (sorted.length == 0) return 0;
+        return sorted[(int) Math.min(sorted.length - 1, Math.ceil(q * sorted.length) - 1)] / 1e6;
+    }
+}

@@ -1,0 +1,109 @@
+//! Fault injection on the tracker through the sequential engine and the pipeline
+//! (see `tests/faults/mod.rs`; `--example faults` prints the table). The bounds are
+//! the measured behaviour of the tracker, so that a regression fails; where the
+//! issue's goal (every fault flagged on its first frame) is not met yet, the test
+//! says so and bounds what is measured.
+
+mod faults;
+
+use faults::{Engine, Fault, LEN, Report, report, run, stream};
+
+fn both(fault: Fault) -> Report {
+    let inputs = stream(fault);
+    let core = report(fault, Engine::Core, &inputs, run(Engine::Core, &inputs));
+    let pipeline = report(
+        fault,
+        Engine::Pipeline,
+        &inputs,
+        run(Engine::Pipeline, &inputs),
+    );
+    // Offline the pipeline is the sequential engine: the same states and poses.
+    assert_eq!(
+        core.outcomes, pipeline.outcomes,
+        "{fault:?}: pipeline differs from core"
+    );
+    println!("{fault:?}: {core:?}");
+    assert!(core.finite, "{fault:?}: a pose is not finite");
+    core
+}
+
+#[test]
+fn a_covered_lens_is_flagged_at_once_and_tracking_resumes() {
+    let r = both(Fault::CoveredLens);
+    assert_eq!(r.lost, LEN, "{r:?}");
+    assert_eq!(r.detected_after, Some(1));
+    assert_eq!(r.silently_wrong, 0);
+    assert_eq!(r.recovered_after, Some(1), "{r:?}");
+    assert_eq!(r.wrong_after, 0);
+    // Registered against the last good frame, the first frame after the fault finds
+    // the camera where it is: the trajectory does not break.
+    assert!(r.drift_m < 0.01 && r.drift_deg < 1.0, "{r:?}");
+}
+
+#[test]
+fn frames_of_another_size_are_rejected_and_do_not_disturb_tracking() {
+    let r = both(Fault::IntrinsicsResolution);
+    assert_eq!(r.rejected, LEN);
+    assert_eq!(r.detected_after, Some(1));
+    assert_eq!(r.recovered_after, Some(1));
+    assert_eq!(r.wrong_after, 0);
+    assert!(r.drift_m < 0.01 && r.drift_deg < 1.0, "{r:?}");
+}
+
+#[test]
+fn black_intensity_is_tracked_on_depth() {
+    // Not a failure to flag: depth alone registers the frames correctly.
+    let r = both(Fault::BlackIntensity);
+    assert_eq!(r.silently_wrong, 0, "{r:?}");
+    assert_eq!(r.tracked_ok + r.lost, LEN);
+    assert_eq!(r.recovered_after, Some(1));
+    assert!(r.drift_m < 0.01 && r.drift_deg < 1.0, "{r:?}");
+}
+
+#[test]
+fn odd_timestamps_do_not_disturb_the_poses() {
+    // Measured: duplicated and backwards timestamps are accepted without a flag (the
+    // engine does not look at time); the poses stay right.
+    for fault in [Fault::DuplicatedTimestamps, Fault::BackwardsTimestamps] {
+        let r = both(fault);
+        assert_eq!(r.silently_wrong, 0, "{r:?}");
+        assert_eq!(r.tracked_ok, LEN, "{r:?}");
+        assert_eq!(r.recovered_after, Some(1));
+        assert!(r.drift_m < 0.01 && r.drift_deg < 1.0, "{r:?}");
+    }
+}
+
+#[test]
+fn a_frozen_frame_reads_as_a_still_camera() {
+    // Measured: not flagged (a repeated frame is a plausible still camera); once
+    // real frames return they register against the frozen one, and the motion
+    // missed while frozen is recovered.
+    let r = both(Fault::FrozenFrame);
+    assert_eq!(r.silently_wrong, 0, "{r:?}");
+    assert_eq!(r.recovered_after, Some(1));
+    assert!(r.drift_m < 0.01 && r.drift_deg < 1.0, "{r:?}");
+}
+
+#[test]
+fn garbage_is_flagged_within_two_frames_and_tracking_resumes() {
+    // Measured: the first garbage frame can pass as tracked (goal: flagged at once);
+    // the rest are lost, and tracking is back within max_lost_frames.
+    let r = both(Fault::GarbageDepth);
+    assert!(r.detected_after.is_some_and(|d| d <= 2), "{r:?}");
+    assert!(r.silently_wrong <= 1, "{r:?}");
+    assert!(r.lost >= LEN - 1, "{r:?}");
+    let max_lost = faults::config().max_lost_frames as usize;
+    assert!(r.recovered_after.is_some_and(|n| n <= max_lost), "{r:?}");
+}
+
+#[test]
+fn a_jump_or_a_zoom_is_at_most_one_wrong_frame() {
+    // Measured: a 30 cm / 20° jump and a 30 % zoom each give one frame reported as
+    // tracked with a wrong motion (goal: flagged); tracking goes on right after it.
+    for fault in [Fault::Jump30cm20deg, Fault::IntrinsicsZoom] {
+        let r = both(fault);
+        assert!(r.silently_wrong <= 1, "{r:?}");
+        assert_eq!(r.recovered_after, Some(1), "{r:?}");
+        assert!(r.wrong_after <= 1, "{r:?}");
+    }
+}
