@@ -199,7 +199,10 @@ fn table_prints_the_three_rows_per_frame_step() {
         }
     }
     // Naive tracking of 20 frames: 19 MOTION calls, no references.
-    let naive = text.lines().find(|l| l.starts_with("| 1 | 20 | naive |")).unwrap();
+    let naive = text
+        .lines()
+        .find(|l| l.starts_with("| 1 | 20 | naive |"))
+        .unwrap();
     assert!(naive.contains("| 19 | - |"), "{naive}");
     // One JSON object per row.
     let rows: Vec<serde_json::Value> = std::fs::read_to_string(&json)
@@ -210,7 +213,10 @@ fn table_prints_the_three_rows_per_frame_step() {
     assert_eq!(rows.len(), 6);
     assert_eq!(rows[3]["frame_step"], 2);
     assert_eq!(rows[3]["frames"], 20);
-    assert!(rows.iter().all(|r| r["ate_rmse_m"].as_f64().is_some_and(|a| a < 0.05)));
+    assert!(
+        rows.iter()
+            .all(|r| r["ate_rmse_m"].as_f64().is_some_and(|a| a < 0.05))
+    );
 }
 
 /// Checks the files of an `ecvo run` output folder against its summary.
