@@ -335,7 +335,7 @@ impl Config {
             reference_levels: levels[..used].to_vec(),
             max_lost_frames: 10,
             max_correction_distance: 100.0,
-            min_anchor_depth_fraction: 0.2,
+            min_anchor_depth_fraction: 0.05,
             min_anchor_texture_fraction: 0.02,
         }
     }

@@ -97,13 +97,19 @@ fn garbage_is_flagged_within_two_frames_and_tracking_resumes() {
 }
 
 #[test]
-fn a_jump_or_a_zoom_is_at_most_one_wrong_frame() {
-    // Measured: a 30 cm / 20° jump and a 30 % zoom each give one frame reported as
+fn a_jump_is_flagged_at_once_and_a_zoom_is_at_most_one_wrong_frame() {
+    // Measured: a 30 cm / 20° jump fails [A] and the recovery against the references
+    // (the residual-spread check), so it is flagged on its first frame, never
+    // reported as tracked, and tracking re-anchors after max_lost_frames (the jump
+    // itself is lost, as drift). A 30 % zoom gives at most one frame reported as
     // tracked with a wrong motion (goal: flagged); tracking goes on right after it.
-    for fault in [Fault::Jump30cm20deg, Fault::IntrinsicsZoom] {
-        let r = both(fault);
-        assert!(r.silently_wrong <= 1, "{r:?}");
-        assert_eq!(r.recovered_after, Some(1), "{r:?}");
-        assert!(r.wrong_after <= 1, "{r:?}");
-    }
+    let max_lost = faults::config().max_lost_frames as usize;
+    let r = both(Fault::Jump30cm20deg);
+    assert_eq!(r.detected_after, Some(1), "{r:?}");
+    assert_eq!(r.silently_wrong, 0, "{r:?}");
+    assert!(r.recovered_after.is_some_and(|n| n <= max_lost), "{r:?}");
+    let r = both(Fault::IntrinsicsZoom);
+    assert!(r.silently_wrong <= 1, "{r:?}");
+    assert!(r.recovered_after.is_some_and(|n| n <= max_lost), "{r:?}");
+    assert!(r.wrong_after <= 1, "{r:?}");
 }
