@@ -532,7 +532,7 @@ impl MotionEstimator {
         let mut cost = self.cost(&wh) / n as f64;
         out.hit_max = true;
         for it in 0..step.max_iterations {
-            let ne = self.normal_equations(level, &wh, p, cost * n as f64);
+            let ne = self.normal_equations(level, &wh, cost * n as f64);
             out.ne = Some(ne);
             out.iterations = it + 1;
             let Some(delta) = ne.solve() else {
@@ -682,12 +682,10 @@ impl MotionEstimator {
         &mut self,
         level: &ImageLevel,
         wh: &Whitener,
-        p: &Params,
         error: f64,
     ) -> NormalEquations {
         let cam = level.camera();
         let (fx, fy) = (cam.fx as f32, cam.fy as f32);
-        let _ = p;
         let accumulate = |res: &Vec<Residual>| {
             let mut acc = Accumulator::new();
             for r in res {

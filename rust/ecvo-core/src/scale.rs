@@ -196,18 +196,10 @@ pub fn next_scale(s: &PassSums, two: usize, one: usize, weighting: Weighting) ->
 /// The starting scale when there is no previous one: the plain (unweighted) second
 /// moments, which the fixed point then shrinks towards the inliers.
 pub fn initial_scale<R: Pair>(chunks: &[Vec<R>], weighting: Weighting) -> Option<Scale> {
-    // A pass with weight 1 everywhere (ν → ∞).
-    let flat = Whitener {
-        l11: 1.0,
-        l12: 0.0,
-        l22: 1.0,
-        l1d: 1.0,
-        nu: f32::INFINITY,
-    };
     let mut sums = [0.0f64; 4];
     let (mut two, mut one) = (0, 0);
     for c in chunks {
-        let p = pass_unweighted(c, &flat, weighting);
+        let p = pass_unweighted(c, weighting);
         for k in 0..4 {
             sums[k] += p[k];
         }
@@ -218,7 +210,8 @@ pub fn initial_scale<R: Pair>(chunks: &[Vec<R>], weighting: Weighting) -> Option
     next_scale(&sums, two, one, weighting)
 }
 
-fn pass_unweighted<R: Pair>(chunk: &[R], _flat: &Whitener, weighting: Weighting) -> PassSums {
+/// The plain second moments of a chunk (weight 1 everywhere, ν → ∞).
+fn pass_unweighted<R: Pair>(chunk: &[R], weighting: Weighting) -> PassSums {
     let mut acc = [0.0f64; 4];
     for r in chunk {
         let (ri, rz) = (r.ri() as f64, r.rz() as f64);
