@@ -2,7 +2,7 @@
 //! every field arbitrary, including NaN, infinities and negative sizes.
 #![no_main]
 
-use ecvo_jni::{DepthFormat, InitArgs};
+use ecvo_jni::{Confidence, DepthFormat, InitArgs};
 use libfuzzer_sys::arbitrary::{Result, Unstructured};
 use libfuzzer_sys::fuzz_target;
 
@@ -29,6 +29,7 @@ fn args(u: &mut Unstructured<'_>) -> Result<InitArgs> {
         mode: u.int_in_range(-1..=3)?,
         live: u.arbitrary()?,
         threads: u.int_in_range(-1..=300)?,
+        point_cloud: u.arbitrary()?,
     })
 }
 
@@ -45,7 +46,14 @@ fuzz_target!(|data: &[u8]| {
             assert_eq!(config.camera.width as i64, i64::from(a.width));
             assert_eq!(config.camera.height as i64, i64::from(a.height));
             assert!((1..=256).contains(&options.threads));
-            assert!(min_conf <= 7);
+            match (format, min_conf) {
+                (DepthFormat::Depth16, Confidence::Documented(level)) => {
+                    assert_eq!(i32::from(level), a.min_confidence);
+                    assert!(level <= 7);
+                }
+                (DepthFormat::Depth16, Confidence::Auto) => assert_eq!(a.min_confidence, -1),
+                (_, rule) => assert_eq!(rule, Confidence::Documented(0)),
+            }
             assert_eq!(DepthFormat::from_code(a.depth_format), Some(format));
             assert!(config.camera.depth_scale.is_finite() && config.camera.depth_scale > 0.0);
         }

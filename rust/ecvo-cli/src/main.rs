@@ -159,7 +159,8 @@ struct TrackArgs {
     paper: bool,
     /// Coarse-to-fine schedule: paper (every 8th/4th/2nd full-resolution pixel),
     /// pyramid (1/8 to full resolution), pyramid-stride2 (1/8 to 1/2, then every
-    /// second full-resolution pixel).
+    /// second full-resolution pixel), or explicit steps LEVEL/STRIDE/ITERATIONS,
+    /// coarsest first, e.g. "3/1/20,2/1/15,1/1/10,0/2/8".
     #[arg(long)]
     schedule: Option<String>,
     /// Residual weighting: scalar (one σ² over r_I and λ r_Z) or bivariate (Kerl et

@@ -74,7 +74,16 @@ impl EngineChoice {
         ]
         .into_iter()
         .find(|s| s.levels() == m.levels)
-        .map_or("custom", |s| s.name());
+        .map_or_else(
+            || {
+                m.levels
+                    .iter()
+                    .map(|l| format!("{}/{}/{}", l.pyramid_level, l.stride, l.max_iterations))
+                    .collect::<Vec<_>>()
+                    .join(",")
+            },
+            |s| s.name().to_string(),
+        );
         format!(
             "schedule {schedule}, {:?} weighting, {:?} depth noise, {:?} prior, correction gate {}",
             m.weighting, m.depth_noise, m.prior, config.max_correction_distance
@@ -137,8 +146,8 @@ impl TrackSettings {
         };
         let e = &self.engine;
         if let Some(name) = &e.schedule {
-            let schedule: Schedule = name.parse().with_context(|| format!("--schedule {name}"))?;
-            config.motion.levels = schedule.levels();
+            config.motion.levels =
+                ecvo_core::parse_schedule(name).with_context(|| format!("--schedule {name}"))?;
         }
         if let Some(w) = e.weighting {
             config.motion.weighting = w;

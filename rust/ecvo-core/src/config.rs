@@ -182,6 +182,39 @@ impl std::str::FromStr for Schedule {
     }
 }
 
+/// Parses a coarse-to-fine schedule: a name (`paper`, `pyramid`, `pyramid-stride2`), or
+/// steps written `LEVEL/STRIDE/ITERATIONS`, comma-separated, coarsest first (the
+/// default is `3/1/20,2/1/15,1/1/10,0/2/8`). Ranges are checked by [`Config::validate`].
+pub fn parse_schedule(s: &str) -> Result<Vec<MotionLevel>> {
+    if let Ok(named) = s.parse::<Schedule>() {
+        return Ok(named.levels());
+    }
+    let bad = |why: String| Error::InvalidConfig {
+        field: "schedule",
+        why,
+    };
+    s.split(',')
+        .map(|step| {
+            let parts: Vec<&str> = step.trim().split('/').collect();
+            let [level, stride, iterations] = parts[..] else {
+                return Err(bad(format!(
+                    "`{step}` is not LEVEL/STRIDE/ITERATIONS (and `{s}` is not paper, pyramid or pyramid-stride2)"
+                )));
+            };
+            let num = |t: &str, what: &str| {
+                t.trim()
+                    .parse::<u32>()
+                    .map_err(|_| bad(format!("`{step}`: {what} `{t}` is not a whole number")))
+            };
+            Ok(MotionLevel {
+                pyramid_level: num(level, "level")? as usize,
+                stride: num(stride, "stride")? as usize,
+                max_iterations: num(iterations, "iterations")?,
+            })
+        })
+        .collect()
+}
+
 /// How the photometric and depth residuals of a pixel are weighted (section 3 of the
 /// paper, after Kerl et al.).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -591,6 +624,30 @@ mod tests {
                 .is_empty()
         );
         assert!(pc.validate().is_ok() && phone.validate().is_ok());
+    }
+
+    #[test]
+    fn schedules_parse_by_name_and_by_steps() {
+        assert_eq!(
+            parse_schedule("paper").unwrap(),
+            Schedule::PaperSampling.levels()
+        );
+        assert_eq!(
+            parse_schedule(" 3/1/20, 2/1/15,1/1/10,0/2/8").unwrap(),
+            Schedule::PyramidStride2.levels()
+        );
+        for bad in ["", "3/1", "3/1/20,", "a/1/2", "3/-1/2", "pyramid-stride3"] {
+            assert!(
+                matches!(
+                    parse_schedule(bad),
+                    Err(Error::InvalidConfig {
+                        field: "schedule",
+                        ..
+                    })
+                ),
+                "{bad:?} parsed"
+            );
+        }
     }
 
     #[test]

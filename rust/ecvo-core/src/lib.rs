@@ -26,7 +26,7 @@ pub mod tracker;
 pub use camera::{Camera, FrameView};
 pub use config::{
     Config, DepthNoiseModel, FilterConfig, Mode, MotionConfig, MotionLevel, MotionPrior, Preset,
-    ReferenceLevel, Schedule, Weighting,
+    ReferenceLevel, Schedule, Weighting, parse_schedule,
 };
 pub use error::{Error, Result};
 pub use motion::{MotionEstimator, MotionResult};
