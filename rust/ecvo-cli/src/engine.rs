@@ -22,7 +22,9 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use ecvo_core::{Config, Counters, FrameOutput, PreparedFrame, Preparer};
 use ecvo_io::{Frame, Sequence};
-use ecvo_pipeline::{Admission, Pipeline, PipelineOptions, PipelineStats, TrackedFrame};
+use ecvo_pipeline::{
+    Admission, Pipeline, PipelineOptions, PipelineStats, PushStatus, TrackedFrame,
+};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Decoded frames the reader thread may keep waiting ahead of the pipeline.
@@ -221,9 +223,23 @@ pub fn track_sequence(
     #[allow(clippy::while_let_on_iterator)]
     while let Some(item) = reader.next() {
         let frame = item.with_context(|| format!("reading {}", sequence.dir().display()))?;
-        pipeline
-            .push_view(frame.view())
-            .with_context(|| format!("frame {} (timestamp {})", frame.index, frame.timestamp))?;
+        let what = || format!("frame {} (timestamp {})", frame.index, frame.timestamp);
+        match pipeline.push_view(frame.view()) {
+            Ok(PushStatus::Repeated) => {
+                // Bit-identical to the previous frame: not tracked (counted in the
+                // pipeline's statistics).
+                log::warn!("{}: identical to the previous frame, skipped", what());
+                reader.recycle(frame);
+                continue;
+            }
+            Ok(_) => {}
+            Err(e @ ecvo_pipeline::Error::TimestampNotIncreasing { .. }) => {
+                log::warn!("{}: {e}; skipped", what());
+                reader.recycle(frame);
+                continue;
+            }
+            Err(e) => return Err(e).with_context(what),
+        }
         if c.preparer.is_some() {
             c.pending.push_back(frame);
         } else {
@@ -246,7 +262,8 @@ pub fn track_sequence(
     drop(rx);
     let summary = pipeline.finish().context("the tracking pipeline failed")?;
     bar.finish_and_clear();
-    if c.outputs.len() != n {
+    let skipped = summary.stats.repeated_frames + summary.stats.timestamps_rejected;
+    if c.outputs.len() as u64 + skipped != n as u64 {
         let what = c
             .pending
             .front()

@@ -44,6 +44,9 @@
 //! decoded as little-endian here; intensity 8-bit gray. Arrays hold exactly
 //! `width * height` values. The data is copied into a pooled frame inside
 //! [`ecvo_pipeline::Pipeline::push`]'s fill closure; no pointer is kept after the call.
+//! A push returns 0 (queued), 1 (queued, an older waiting frame dropped: live mode) or
+//! 2 (bit-identical to the previous frame: not tracked, see
+//! [`ecvo_pipeline::PushStatus::Repeated`]).
 //! `DEPTH16` samples are decoded while copying ([`Depth16Decoder`], with the
 //! [`Confidence`] rule `minConfidence` chose: a level 0..=7, or -1 for auto).
 //!
@@ -56,7 +59,9 @@
 //!
 //! ## Errors
 //!
-//! `IllegalArgumentException` for bad input (the message names the field),
+//! `IllegalArgumentException` for bad input (the message names the field; a push
+//! whose timestamp is not after the previous accepted frame's is one: the frame is not
+//! tracked, later frames are),
 //! `IllegalStateException` for a released handle or a closed pipeline,
 //! `RuntimeException` for a stage failure or a caught panic (`native_method!` wraps
 //! every call in `catch_unwind`; the workspace builds with `panic = "unwind"`).

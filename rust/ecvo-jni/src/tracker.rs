@@ -108,6 +108,7 @@ impl NativeTracker {
         Ok(match status {
             PushStatus::Accepted => 0,
             PushStatus::DroppedOldest => 1,
+            PushStatus::Repeated => 2,
         })
     }
 

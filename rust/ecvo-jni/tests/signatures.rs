@@ -109,3 +109,70 @@ fn rust_and_kotlin_declare_the_same_native_methods() {
         "NativeBridge.kt (left) and ecvo-jni (right) disagree"
     );
 }
+
+/// The JNI descriptor of a Java parameter or return type.
+fn java_descriptor(java: &str) -> String {
+    match java.trim() {
+        "int" => "I".into(),
+        "long" => "J".into(),
+        "double" => "D".into(),
+        "float" => "F".into(),
+        "boolean" => "Z".into(),
+        "short" => "S".into(),
+        "byte" => "B".into(),
+        "void" => "V".into(),
+        "short[]" => "[S".into(),
+        "byte[]" => "[B".into(),
+        "float[]" => "[F".into(),
+        "double[]" => "[D".into(),
+        "ByteBuffer" => "Ljava/nio/ByteBuffer;".into(),
+        other => panic!("add the Java type `{other}` to this test"),
+    }
+}
+
+/// The Java twin of `NativeBridge` used by the JNI drivers (`tests/drivers`) binds the
+/// same exported symbols by their short names, which carry no signature: a missing
+/// parameter is not a link error but garbage read by the native side (it happened:
+/// the drivers once passed 13 arguments to the 14 of `nativeInit`). Each of its
+/// natives must have the Rust declaration's signature.
+#[test]
+fn the_drivers_java_twin_declares_the_same_signatures() {
+    let java =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/drivers/io/ecvo/NativeBridge.java");
+    let src = std::fs::read_to_string(&java).expect("NativeBridge.java");
+    let rust: BTreeMap<String, String> = ecvo_jni::declared_signatures()
+        .into_iter()
+        .map(|(export, sig)| {
+            let name = export.strip_prefix("Java_io_ecvo_NativeBridge_").unwrap();
+            (name.to_string(), sig)
+        })
+        .collect();
+    let mut seen = 0;
+    for decl in src.split("public static native ").skip(1) {
+        let decl = &decl[..decl.find(';').expect("declaration ends with ;")];
+        let open = decl.find('(').expect("parameter list");
+        let close = decl.rfind(')').expect("parameter list");
+        let mut head = decl[..open].split_whitespace();
+        let ret = java_descriptor(head.next().expect("return type"));
+        let name = head.next().expect("method name");
+        let params: String = decl[open + 1..close]
+            .split(',')
+            .filter(|p| !p.trim().is_empty())
+            .map(|p| {
+                let p = p.split_whitespace().collect::<Vec<_>>();
+                java_descriptor(p[..p.len() - 1].join(" ").as_str())
+            })
+            .collect();
+        let sig = format!("({params}){ret}");
+        assert_eq!(
+            rust.get(name),
+            Some(&sig),
+            "NativeBridge.java's {name} (right) disagrees with ecvo-jni (left)"
+        );
+        seen += 1;
+    }
+    assert!(
+        seen >= 10,
+        "parsed only {seen} natives from NativeBridge.java"
+    );
+}

@@ -125,6 +125,16 @@ pub enum Error {
     /// A thread could not be started.
     #[error("could not start the pipeline's threads: {0}")]
     Spawn(String),
+    /// The frame's timestamp is not greater than the last frame's accepted by `push`
+    /// (a duplicated or backwards timestamp). The frame is not queued; the pipeline
+    /// goes on, and frames with later timestamps are accepted.
+    #[error("timestamp {timestamp} is not after the previous frame's ({previous})")]
+    TimestampNotIncreasing {
+        /// The last accepted frame's timestamp (seconds).
+        previous: f64,
+        /// The rejected frame's timestamp (seconds).
+        timestamp: f64,
+    },
 }
 
 /// Result with the pipeline's error.
@@ -225,6 +235,14 @@ pub enum PushStatus {
     /// Live mode: the frame was queued, and the oldest waiting frame was dropped to
     /// make room for it.
     DroppedOldest,
+    /// The frame is bit-identical (depth and intensity) to the previous frame given
+    /// to `push`: a frozen camera delivering the same image again. It is not queued
+    /// (it carries no new information, and tracked it would read as a still camera);
+    /// counted in [`PipelineStats::repeated_frames`]. Its timestamp counts as the
+    /// last one, and the next new frame is registered against the last tracked one.
+    /// Frames without any valid depth are never `Repeated`: they are tracked, and
+    /// flagged lost.
+    Repeated,
 }
 
 /// A tracked frame as sent to [`Pipeline::outputs`].
@@ -322,6 +340,8 @@ struct Progress {
     outputs_discarded: u64,
     ahead_computed: u64,
     ahead_used: u64,
+    timestamps_rejected: u64,
+    repeated_frames: u64,
     first_push: Option<Instant>,
     last_tracked: Option<Instant>,
 }
@@ -355,6 +375,8 @@ struct Shared {
     input_closed: AtomicBool,
     failure: Mutex<Option<Error>>,
     next_sequence: AtomicU64,
+    /// The last frame accepted by `push`: its timestamp and content hash.
+    last_input: Mutex<LastInput>,
 
     raw: Mutex<RawPool>,
     raw_freed: Condvar,
@@ -377,7 +399,71 @@ struct Shared {
     timers: Timers,
 }
 
+/// What `push` remembers of the last frame it accepted (queued or repeated).
+#[derive(Default)]
+struct LastInput {
+    timestamp: Option<f64>,
+    hash: Option<u64>,
+}
+
+/// A 64-bit hash of a frame's intensity and depth, to tell a frame bit-identical to
+/// the previous one (two different frames collide with probability about 2^-64). Four
+/// independent lanes of multiply-rotate over 8-byte words.
+fn frame_hash(intensity: &[u8], depth: &[u16]) -> u64 {
+    const K: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut lanes = [K, K ^ 1, K ^ 2, K ^ 3];
+    let mut mix = |i: usize, w: u64| {
+        lanes[i & 3] = (lanes[i & 3] ^ w).wrapping_mul(K).rotate_left(29);
+    };
+    let words = intensity.chunks_exact(8);
+    let tail = words.remainder();
+    let mut n = 0;
+    for w in words {
+        mix(
+            n,
+            u64::from_le_bytes([w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]]),
+        );
+        n += 1;
+    }
+    for &b in tail {
+        mix(n, u64::from(b) | 1 << 63);
+        n += 1;
+    }
+    let words = depth.chunks_exact(4);
+    let tail = words.remainder();
+    for w in words {
+        mix(
+            n,
+            u64::from(w[0]) | u64::from(w[1]) << 16 | u64::from(w[2]) << 32 | u64::from(w[3]) << 48,
+        );
+        n += 1;
+    }
+    for &d in tail {
+        mix(n, u64::from(d) | 1 << 62);
+        n += 1;
+    }
+    let h = lanes.iter().fold(
+        intensity.len() as u64 ^ (depth.len() as u64) << 32,
+        |h, &l| (h ^ l).wrapping_mul(K).rotate_left(31),
+    );
+    h ^ h >> 32
+}
+
 impl Shared {
+    /// Fails (and counts) if `timestamp` is not after the last accepted frame's.
+    fn check_timestamp(&self, last: &LastInput, timestamp: f64) -> Result<()> {
+        match last.timestamp {
+            Some(previous) if timestamp <= previous => {
+                self.update_progress(|p| p.timestamps_rejected += 1);
+                Err(Error::TimestampNotIncreasing {
+                    previous,
+                    timestamp,
+                })
+            }
+            _ => Ok(()),
+        }
+    }
+
     fn aborted(&self) -> bool {
         self.abort.load(Ordering::Acquire)
     }
@@ -594,6 +680,7 @@ impl Pipeline {
             input_closed: AtomicBool::new(false),
             failure: Mutex::new(None),
             next_sequence: AtomicU64::new(0),
+            last_input: Mutex::new(LastInput::default()),
             // Raw buffers are created now too, for the same reason as the frame pool.
             raw: Mutex::new(RawPool {
                 free: (0..q + 3)
@@ -712,8 +799,11 @@ impl Pipeline {
     /// full; live, returns at once, dropping the oldest waiting frame if need be.
     ///
     /// Push from one thread at a time for frames to be tracked in push order. Fails
-    /// on a non-finite timestamp, after [`Pipeline::close_input`], or once a stage
-    /// has failed (with that failure).
+    /// on a non-finite timestamp, on one not greater than the last accepted frame's
+    /// ([`Error::TimestampNotIncreasing`]; the frame is not queued, the pipeline goes
+    /// on), after [`Pipeline::close_input`], or once a stage has failed (with that
+    /// failure). A frame bit-identical to the previous one is not queued:
+    /// [`PushStatus::Repeated`].
     pub fn push(
         &self,
         timestamp: f64,
@@ -726,14 +816,38 @@ impl Pipeline {
                 ecvo_core::Error::BadFrame(format!("timestamp {timestamp} is not finite")).into(),
             );
         }
+        // A closed or failed pipeline says so before anything else.
+        if s.aborted() || s.input_closed.load(Ordering::Acquire) {
+            return Err(s.stopped_error());
+        }
+        s.check_timestamp(&lock(&s.last_input), timestamp)?;
         let (raw, mut dropped) = s.take_raw()?;
         let mut guard = RawGuard {
             shared: s,
             raw: Some(raw),
         };
-        {
+        let (hash, blank) = {
             let r = guard.raw.as_mut().expect("the guard holds the frame");
             fill(&mut r.intensity, &mut r.depth);
+            (
+                frame_hash(&r.intensity, &r.depth),
+                r.depth.iter().all(|&d| d == 0),
+            )
+        };
+        {
+            // Checked again: another thread may have pushed meanwhile.
+            let mut last = lock(&s.last_input);
+            s.check_timestamp(&last, timestamp)?;
+            // A frame without any depth (a covered lens) goes to the tracker, which
+            // flags it lost, however often it comes.
+            let repeated = !blank && last.hash == Some(hash);
+            last.timestamp = Some(timestamp);
+            last.hash = Some(hash);
+            if repeated {
+                drop(last);
+                s.update_progress(|p| p.repeated_frames += 1);
+                return Ok(PushStatus::Repeated);
+            }
         }
         let mut raw = guard.raw.take().expect("the guard holds the frame");
         raw.timestamp = timestamp;
@@ -882,6 +996,8 @@ impl Pipeline {
                     p.outputs_discarded,
                     p.ahead_computed,
                     p.ahead_used,
+                    p.timestamps_rejected,
+                    p.repeated_frames,
                 ],
                 wall,
             )
@@ -896,6 +1012,8 @@ impl Pipeline {
             outputs_discarded,
             ahead_computed,
             ahead_used,
+            timestamps_rejected,
+            repeated_frames,
         ] = progress;
         PipelineStats {
             filter: lock(&s.timers.filter).summary(),
@@ -913,6 +1031,8 @@ impl Pipeline {
             outputs_discarded,
             ahead_computed,
             ahead_used,
+            timestamps_rejected,
+            repeated_frames,
             input_queue: s.input.stats(),
             tracker_queue: s.prepared.stats(),
             geometry_queue: s.to_geometry.stats(),

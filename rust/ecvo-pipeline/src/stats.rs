@@ -164,6 +164,12 @@ pub struct PipelineStats {
     /// Of those, the ones the tracker used (the others were registered against an
     /// older frame, the previous one having been lost or dropped).
     pub ahead_used: u64,
+    /// Frames refused by `push` because their timestamp was not after the previous
+    /// frame's ([`crate::Error::TimestampNotIncreasing`]); not in `pushed`.
+    pub timestamps_rejected: u64,
+    /// Frames bit-identical to the previous one, not queued
+    /// ([`crate::PushStatus::Repeated`]); not in `pushed`.
+    pub repeated_frames: u64,
     /// Input queue (raw frames waiting for the filter).
     pub input_queue: QueueStats,
     /// Tracker queue (prepared frames waiting for the tracker).

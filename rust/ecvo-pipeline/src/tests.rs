@@ -303,3 +303,129 @@ fn frame_to_frame_computed_ahead_gives_the_sequential_poses_even_around_lost_fra
         stats.ahead_used
     );
 }
+
+#[test]
+fn non_increasing_timestamps_are_refused_and_counted_and_the_pipeline_goes_on() {
+    let (config, frames) = stream(4);
+    for admission in [Admission::Offline, Admission::Live] {
+        let p = Pipeline::new(
+            config.clone(),
+            PipelineOptions {
+                admission,
+                keep_trajectory: true,
+                ..PipelineOptions::default()
+            },
+        )
+        .unwrap();
+        push(&p, &frames[0]).unwrap();
+        push(&p, &frames[1]).unwrap();
+        // The same timestamp again (new content), then an earlier one.
+        let same = p.push(frames[1].timestamp, |i, d| {
+            i.copy_from_slice(&frames[2].intensity);
+            d.copy_from_slice(&frames[2].depth);
+        });
+        assert!(
+            matches!(same, Err(Error::TimestampNotIncreasing { previous, timestamp })
+                if previous == frames[1].timestamp && timestamp == frames[1].timestamp),
+            "{same:?}"
+        );
+        let back = p.push(frames[0].timestamp, |_, _| {
+            panic!("a refused frame is not copied")
+        });
+        assert!(
+            matches!(back, Err(Error::TimestampNotIncreasing { .. })),
+            "{back:?}"
+        );
+        push(&p, &frames[2]).unwrap();
+        push(&p, &frames[3]).unwrap();
+        p.flush().unwrap();
+        let st = p.stats();
+        assert_eq!(st.timestamps_rejected, 2, "{st:?}");
+        assert_eq!(st.pushed, 4);
+        assert_eq!(st.tracked + st.dropped, 4);
+        let stamps: Vec<f64> = p.trajectory().iter().map(|r| r.timestamp).collect();
+        assert!(stamps.windows(2).all(|w| w[0] < w[1]), "{stamps:?}");
+        p.finish().unwrap();
+    }
+}
+
+#[test]
+fn a_frame_identical_to_the_previous_one_is_reported_repeated_and_not_tracked() {
+    let (config, frames) = stream(3);
+    let p = Pipeline::new(
+        config,
+        PipelineOptions {
+            keep_trajectory: true,
+            ..PipelineOptions::default()
+        },
+    )
+    .unwrap();
+    let same_as = |t: f64, f: &Frame| {
+        p.push(t, |i, d| {
+            i.copy_from_slice(&f.intensity);
+            d.copy_from_slice(&f.depth);
+        })
+    };
+    assert_eq!(push(&p, &frames[0]).unwrap(), PushStatus::Accepted);
+    // Frame 0 again at new times: repeated, each time.
+    assert_eq!(same_as(0.5, &frames[0]).unwrap(), PushStatus::Repeated);
+    assert_eq!(same_as(0.6, &frames[0]).unwrap(), PushStatus::Repeated);
+    // One pixel of depth differs: a new frame.
+    let mut f = Frame {
+        timestamp: 0.7,
+        intensity: frames[0].intensity.clone(),
+        depth: frames[0].depth.clone(),
+    };
+    f.depth[1234] ^= 1;
+    assert_eq!(push(&p, &f).unwrap(), PushStatus::Accepted);
+    // One pixel of intensity differs: new again.
+    f.timestamp = 0.8;
+    f.intensity[77] ^= 0x80;
+    assert_eq!(push(&p, &f).unwrap(), PushStatus::Accepted);
+    // The repeated frame's timestamp counted as the last one.
+    assert!(matches!(
+        same_as(0.55, &frames[1]),
+        Err(Error::TimestampNotIncreasing { .. })
+    ));
+    assert_eq!(same_as(1.0, &frames[1]).unwrap(), PushStatus::Accepted);
+    let summary = p.finish().unwrap();
+    assert_eq!(summary.stats.repeated_frames, 2);
+    assert_eq!(summary.stats.pushed, 4);
+    assert_eq!(summary.stats.tracked, 4);
+    let stamps: Vec<f64> = summary.trajectory.iter().map(|r| r.timestamp).collect();
+    assert_eq!(stamps, [frames[0].timestamp, 0.7, 0.8, 1.0]);
+}
+
+#[test]
+fn the_frame_hash_sees_every_sample() {
+    let i = vec![7u8; 21];
+    let d = vec![300u16; 21];
+    let h = frame_hash(&i, &d);
+    assert_eq!(h, frame_hash(&i.clone(), &d.clone()));
+    for k in 0..21 {
+        let mut i2 = i.clone();
+        i2[k] ^= 1;
+        assert_ne!(h, frame_hash(&i2, &d), "intensity {k}");
+        let mut d2 = d.clone();
+        d2[k] ^= 0x100;
+        assert_ne!(h, frame_hash(&i, &d2), "depth {k}");
+    }
+    // The same bytes split differently between the planes are another frame.
+    assert_ne!(frame_hash(&[], &[0; 4]), frame_hash(&[0; 8], &[]));
+}
+
+#[test]
+fn frames_without_depth_are_never_repeated() {
+    let (config, frames) = stream(1);
+    let p = Pipeline::new(config, PipelineOptions::default()).unwrap();
+    push(&p, &frames[0]).unwrap();
+    for k in 1..4 {
+        let st = p.push(k as f64, |i, d| {
+            i.fill(0);
+            d.fill(0);
+        });
+        assert_eq!(st.unwrap(), PushStatus::Accepted, "blank frame {k}");
+    }
+    let st = p.finish().unwrap().stats;
+    assert_eq!((st.tracked, st.repeated_frames), (4, 0));
+}

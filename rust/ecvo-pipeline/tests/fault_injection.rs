@@ -27,6 +27,25 @@ fn both(fault: Fault) -> Report {
     core
 }
 
+/// The faults the pipeline's input checks (timestamps, repeated frames), which the
+/// engine does not see: the pipeline's report, and the engine's.
+fn input_fault(fault: Fault) -> (Report, Report) {
+    let inputs = stream(fault);
+    let core = report(fault, Engine::Core, &inputs, run(Engine::Core, &inputs));
+    let pipeline = report(
+        fault,
+        Engine::Pipeline,
+        &inputs,
+        run(Engine::Pipeline, &inputs),
+    );
+    println!("{fault:?}: {pipeline:?}");
+    assert!(
+        core.finite && pipeline.finite,
+        "{fault:?}: a pose is not finite"
+    );
+    (pipeline, core)
+}
+
 #[test]
 fn a_covered_lens_is_flagged_at_once_and_tracking_resumes() {
     let r = both(Fault::CoveredLens);
@@ -61,27 +80,36 @@ fn black_intensity_is_tracked_on_depth() {
 }
 
 #[test]
-fn odd_timestamps_do_not_disturb_the_poses() {
-    // Measured: duplicated and backwards timestamps are accepted without a flag (the
-    // engine does not look at time); the poses stay right.
+fn non_increasing_timestamps_are_refused_by_the_pipeline_on_their_first_frame() {
+    // The pipeline refuses every frame whose timestamp is not after the last accepted
+    // one (an error, counted); tracking goes on with the next good frame. The engine
+    // itself does not look at time: there they are tracked, unflagged, poses right.
     for fault in [Fault::DuplicatedTimestamps, Fault::BackwardsTimestamps] {
-        let r = both(fault);
+        let (r, core) = input_fault(fault);
+        assert_eq!(r.rejected, LEN, "{r:?}");
+        assert_eq!(r.detected_after, Some(1), "{r:?}");
         assert_eq!(r.silently_wrong, 0, "{r:?}");
-        assert_eq!(r.tracked_ok, LEN, "{r:?}");
-        assert_eq!(r.recovered_after, Some(1));
+        assert_eq!(r.recovered_after, Some(1), "{r:?}");
+        assert_eq!(r.wrong_after, 0, "{r:?}");
         assert!(r.drift_m < 0.01 && r.drift_deg < 1.0, "{r:?}");
+        assert_eq!(core.detected_after, None, "{core:?}");
+        assert_eq!(core.tracked_ok, LEN, "{core:?}");
     }
 }
 
 #[test]
-fn a_frozen_frame_reads_as_a_still_camera() {
-    // Measured: not flagged (a repeated frame is a plausible still camera); once
-    // real frames return they register against the frozen one, and the motion
-    // missed while frozen is recovered.
-    let r = both(Fault::FrozenFrame);
+fn a_frozen_frame_is_reported_repeated_by_the_pipeline_on_its_first_frame() {
+    // Each repetition of the last good frame is `PushStatus::Repeated` and not
+    // tracked; the first new frame registers against the last good one, across the
+    // motion missed while frozen. The engine alone reads it as a still camera.
+    let (r, core) = input_fault(Fault::FrozenFrame);
+    assert_eq!(r.repeated, LEN, "{r:?}");
+    assert_eq!(r.detected_after, Some(1), "{r:?}");
     assert_eq!(r.silently_wrong, 0, "{r:?}");
-    assert_eq!(r.recovered_after, Some(1));
+    assert_eq!(r.recovered_after, Some(1), "{r:?}");
+    assert_eq!(r.wrong_after, 0, "{r:?}");
     assert!(r.drift_m < 0.01 && r.drift_deg < 1.0, "{r:?}");
+    assert_eq!(core.detected_after, None, "{core:?}");
 }
 
 #[test]

@@ -139,9 +139,15 @@ fn a_reference_frame_lives_exactly_as_long_as_it_is_a_reference() {
             "frame {i}"
         );
     }
-    // Streaming at full speed: bounded by the levels and the queue depth.
+    // Streaming at full speed: bounded by the levels and the queue depth. The same
+    // frames again, later (timestamps must increase).
     for f in frames {
-        pipeline.push_view(f.view()).unwrap();
+        pipeline
+            .push_view(ecvo_core::FrameView {
+                timestamp: f.timestamp + 1000.0,
+                ..f.view()
+            })
+            .unwrap();
     }
     let summary = pipeline.finish().unwrap();
     let pool = summary.stats.frame_pool;

@@ -10,7 +10,7 @@
 
 use ecvo_core::nalgebra::{Translation3, UnitQuaternion, Vector3};
 use ecvo_core::{Camera, Config, FrameView, Mode, Odometry, Pose, Preset, TrackingState, se3};
-use ecvo_pipeline::{Admission, Pipeline, PipelineOptions};
+use ecvo_pipeline::{Admission, Pipeline, PipelineOptions, PushStatus};
 use ecvo_synth::{SynthCamera, SynthSequence, apply_noise, render};
 
 /// Frames in a run.
@@ -93,6 +93,9 @@ pub struct Input {
 pub enum Outcome {
     /// The push failed with an error.
     Rejected,
+    /// The pipeline reported the frame bit-identical to the previous one
+    /// (`PushStatus::Repeated`) and did not track it.
+    Repeated,
     /// Tracked with this state and pose.
     Tracked(TrackingState, Pose),
 }
@@ -114,6 +117,8 @@ pub struct Report {
     pub outcomes: Vec<Outcome>,
     /// Faulty frames rejected by `push`.
     pub rejected: usize,
+    /// Faulty frames reported repeated by `push` (not tracked).
+    pub repeated: usize,
     /// Faulty frames flagged `Lost`.
     pub lost: usize,
     /// Faulty frames tracked with a frame-to-frame motion close to the truth.
@@ -268,7 +273,7 @@ pub fn run(engine: Engine, inputs: &[Input]) -> Vec<Outcome> {
                 },
             )
             .expect("valid options");
-            let accepted: Vec<bool> = inputs
+            let pushed: Vec<Option<PushStatus>> = inputs
                 .iter()
                 .map(|f| {
                     p.push_view(FrameView {
@@ -276,19 +281,19 @@ pub fn run(engine: Engine, inputs: &[Input]) -> Vec<Outcome> {
                         intensity: &f.intensity,
                         depth: &f.depth,
                     })
-                    .is_ok()
+                    .ok()
                 })
                 .collect();
             let summary = p.finish().expect("the pipeline finishes");
             let mut records = summary.trajectory.iter();
-            accepted
+            pushed
                 .iter()
-                .map(|&ok| {
-                    if ok {
-                        let r = records.next().expect("one record per accepted frame");
+                .map(|status| match status {
+                    None => Outcome::Rejected,
+                    Some(PushStatus::Repeated) => Outcome::Repeated,
+                    Some(_) => {
+                        let r = records.next().expect("one record per queued frame");
                         Outcome::Tracked(r.state, r.pose)
-                    } else {
-                        Outcome::Rejected
                     }
                 })
                 .collect()
@@ -309,6 +314,7 @@ pub fn report(fault: Fault, engine: Engine, inputs: &[Input], outcomes: Vec<Outc
         engine,
         outcomes: Vec::new(),
         rejected: 0,
+        repeated: 0,
         lost: 0,
         tracked_ok: 0,
         silently_wrong: 0,
@@ -328,6 +334,12 @@ pub fn report(fault: Fault, engine: Engine, inputs: &[Input], outcomes: Vec<Outc
             Outcome::Rejected => {
                 if faulty {
                     r.rejected += 1;
+                }
+                true
+            }
+            Outcome::Repeated => {
+                if faulty {
+                    r.repeated += 1;
                 }
                 true
             }
@@ -399,17 +411,18 @@ fn opt(v: Option<usize>) -> String {
 /// The markdown table of the README.
 pub fn table(reports: &[Report]) -> String {
     let mut s = format!(
-        "| fault ({LEN} frames from frame {START} of {FRAMES}) | engine | rejected | flagged lost | tracked right | silently wrong | detected after | recovered after | wrong after | drift across fault (cm / °) | finite |\n|---|---|---|---|---|---|---|---|---|---|---|\n"
+        "| fault ({LEN} frames from frame {START} of {FRAMES}) | engine | rejected | repeated (not tracked) | flagged lost | tracked right | silently wrong | detected after | recovered after | wrong after | drift across fault (cm / °) | finite |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n"
     );
     for r in reports {
         s += &format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.2} / {:.2} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.2} / {:.2} | {} |\n",
             r.fault.name(),
             match r.engine {
                 Engine::Core => "core",
                 Engine::Pipeline => "pipeline",
             },
             r.rejected,
+            r.repeated,
             r.lost,
             r.tracked_ok,
             r.silently_wrong,

@@ -6,7 +6,8 @@ import java.nio.ByteBuffer;
  * A Java twin of android-app's Kotlin {@code io.ecvo.NativeBridge} (same class name,
  * same static native methods, hence the same JNI symbols) for the soak and stress
  * drivers, which run on a bare JVM without kotlinc. The signatures are checked
- * against the Rust declarations by {@code Drivers.checkSignatures}.
+ * against the Rust declarations by {@code tests/signatures.rs} (JNI binds the short
+ * names, which carry no signature: a missing parameter would be read as garbage).
  */
 public final class NativeBridge {
     static {
@@ -16,7 +17,8 @@ public final class NativeBridge {
     private NativeBridge() {}
 
     public static native long nativeInit(int width, int height, double fx, double fy, double cx, double cy,
-            int depthFormat, double depthScale, int minConfidence, int preset, int mode, boolean live, int threads);
+            int depthFormat, double depthScale, int minConfidence, int preset, int mode, boolean live, int threads,
+            boolean pointCloud);
     public static native int nativePushBuffers(long handle, long timestampNs, ByteBuffer depth, ByteBuffer intensity);
     public static native int nativePushArrays(long handle, long timestampNs, short[] depth, byte[] intensity);
     public static native long nativeGetPose(long handle, float[] out);

@@ -29,7 +29,7 @@ public final class Soak {
 
         int threads0 = Proc.threads(), fds0 = Proc.fds();
         long handle = NativeBridge.nativeInit(f.width, f.height, f.fx, f.fy, f.cx, f.cy,
-                0, 1000.0, 0, 1, 2, true, 2);
+                0, 1000.0, 0, 1, 2, true, 2, true);
         AtomicBoolean done = new AtomicBoolean(false);
         AtomicLong polls = new AtomicLong(), trajectoryPolls = new AtomicLong(), maxTrajectory = new AtomicLong();
         long[] poseNs = new long[4_000_000];

@@ -379,6 +379,7 @@ class NativeBridgeTest {
         val errors = AtomicReference<Throwable?>(null)
         val start = CountDownLatch(1)
         val pushes = AtomicInteger()
+        val others = AtomicInteger()
         val threads = (0 until 4).map { k ->
             Thread {
                 try {
@@ -388,10 +389,18 @@ class NativeBridgeTest {
                     for (i in 0 until 40) {
                         if (k < 2) {
                             val f = if (s != null) i % s.stamps.size else 0
-                            val status = if (s != null && k == 0) t.pushFrame(1000L * i + k, s.depth[f], s.intensity[f])
-                            else t.pushFrame(1000L * i + k, d, g)
-                            assertTrue(status == PushStatus.ACCEPTED || status == PushStatus.DROPPED)
-                            pushes.incrementAndGet()
+                            // Two threads pushing to one tracker race: a push whose timestamp
+                            // is not after the one that got in first is refused, and the same
+                            // buffers twice in a row are REPEATED; both are documented.
+                            try {
+                                val status = if (s != null && k == 0) t.pushFrame(1000L * i + k, s.depth[f], s.intensity[f])
+                                else t.pushFrame(1000L * i + k, d, g)
+                                if (status == PushStatus.ACCEPTED || status == PushStatus.DROPPED) pushes.incrementAndGet()
+                                else { assertEquals(PushStatus.REPEATED, status); others.incrementAndGet() }
+                            } catch (e: IllegalArgumentException) {
+                                assertTrue(e.message, e.message!!.contains("is not after the previous frame"))
+                                others.incrementAndGet()
+                            }
                         } else {
                             t.getPose(m); t.state; t.stats()
                             if (i % 10 == 0) { t.trajectory(); t.pointCloud(100) }
@@ -407,8 +416,9 @@ class NativeBridgeTest {
         threads.forEach { it.join(60_000) }
         errors.get()?.let { throw AssertionError("a thread failed", it) }
         t.flush()
-        assertEquals(80, pushes.get())
-        assertEquals(80L, t.stats().framesPushed)
+        assertEquals(80, pushes.get() + others.get())
+        assertTrue("pushes accepted: ${pushes.get()}", pushes.get() >= 1)
+        assertEquals(pushes.get().toLong(), t.stats().framesPushed)
         t.close()
     }
 

@@ -115,7 +115,10 @@ class Tracker(val config: TrackerConfig) : PoseTracker {
      * Pushes one frame from direct buffers: [depth] holds `width * height` 16-bit samples
      * in native byte order in the config's [DepthFormat], [intensity] `width * height`
      * 8-bit gray values, both row-major without padding, read from position 0.
-     * [timestampNs] is the capture time (e.g. `Image.getTimestamp()`), increasing.
+     * [timestampNs] is the capture time (e.g. `Image.getTimestamp()`), increasing: a
+     * timestamp not after the previous frame's is an IllegalArgumentException (the frame is
+     * not tracked; later frames are). A frame bit-identical to the previous one is
+     * [PushStatus.REPEATED] and not tracked.
      */
     fun pushFrame(timestampNs: Long, depth: ByteBuffer, intensity: ByteBuffer): PushStatus = withHandle { h ->
         PushStatus.fromCode(NativeBridge.nativePushBuffers(h, timestampNs, depth, intensity))

@@ -122,7 +122,13 @@ enum class PushStatus(val code: Int) {
     ACCEPTED(0),
 
     /** This frame was queued; an older frame still waiting was dropped untracked to bound latency. */
-    DROPPED(1);
+    DROPPED(1),
+
+    /**
+     * This frame is bit-identical to the previous one (a frozen camera delivering the same
+     * image again): not tracked, counted; the next new frame is tracked as usual.
+     */
+    REPEATED(2);
 
     companion object {
         /** The status with this [code]; an unknown code means the library and this class disagree. */

@@ -33,8 +33,8 @@ class TrackerApiTest {
         assertEquals(listOf(0, 1), Admission.entries.map { it.code })
         assertTrue(Admission.LIVE.live)
         assertFalse(Admission.OFFLINE.live)
-        assertEquals(listOf(0, 1), PushStatus.entries.map { it.code })
-        assertEquals(listOf("ACCEPTED", "DROPPED"), PushStatus.entries.map { it.name })
+        assertEquals(listOf(0, 1, 2), PushStatus.entries.map { it.code })
+        assertEquals(listOf("ACCEPTED", "DROPPED", "REPEATED"), PushStatus.entries.map { it.name })
         assertEquals(listOf(0, 1, 2), TrackingState.entries.map { it.code })
         assertEquals(listOf("INITIALISING", "TRACKING", "LOST"), TrackingState.entries.map { it.name })
     }
@@ -52,7 +52,7 @@ class TrackerApiTest {
         // Codes coming back from the library: a mismatch is a broken build, not bad input.
         val e = assertThrows<IllegalStateException> { TrackingState.fromCode(7) }
         assertTrue(e.message!!.contains("7"))
-        assertThrows<IllegalStateException> { PushStatus.fromCode(2) }
+        assertThrows<IllegalStateException> { PushStatus.fromCode(3) }
     }
 
     @Test
