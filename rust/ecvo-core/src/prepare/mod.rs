@@ -48,6 +48,8 @@ mod pyramid;
 mod reference;
 mod removal;
 mod simd;
+#[cfg(test)]
+mod tests;
 
 /// Fewest pixels one rayon task of a row-parallel loop takes. Handing work to
 /// another thread costs tens of microseconds, so an image is only split when each
