@@ -1,173 +1,18 @@
-//! Frame preparation: the filter stage of the paper (section 4.2, Figure 4).
-//!
-//! Raw depth is converted to metres, smoothed by a bilateral filter over valid
-//! pixels only, then two removal filters drop unreliable pixels:
-//!
-//! - **normal-based removal** (εn): two normals from divided differences of the
-//!   back-projected points, one along the principal axes and one along the
-//!   diagonals; a pixel whose two normals differ by more than εn is dropped,
-//!   otherwise their average is its normal;
-//! - **contour-based removal** (εg): where the cross-product normal
-//!   `(p(u-1,0) - p(u)) × (p(u,-1) - p(u))` makes an angle within `90° ± εg` with
-//!   the viewing ray `p(u)`, the 3x3 neighbourhood is dropped.
-//!
-//! Both masks are computed on the same smoothed depth and applied together. The
-//! result feeds an image pyramid (2x2 mean intensity, 2x2 mean of agreeing valid
-//! depths), per-level gradients, and per-schedule-step template points. A frame is
-//! prepared once and reused when it becomes the previous or a reference frame.
+//! The preparation as it was before it was fused into a few passes, kept to check
+//! that the fused passes give the same frame bit for bit.
+#![allow(clippy::all)]
 
+use super::{D, I, ImageLevel, PreparedFrame, TEXTURE_GRADIENT, Template, rows, rows_per_task};
 use crate::camera::{Camera, FrameView};
 use crate::config::{Config, FilterConfig, MotionLevel};
 use crate::error::Result;
 
 use rayon::prelude::*;
 
-/// Fewest pixels one rayon task of a row-parallel loop takes. Handing work to
-/// another thread costs tens of microseconds, so an image is only split when each
-/// part has at least this many pixels: a 640x480 image into four tasks, a 320x240
-/// one not at all. Every output pixel depends only on the inputs, never on the
-/// order of the rows, so the result is the same whatever the number of threads.
-const PIXELS_PER_TASK: usize = 65536;
-
-/// Rows of width `w` per rayon task.
-fn rows_per_task(w: usize) -> usize {
-    PIXELS_PER_TASK.div_ceil(w.max(1))
-}
-
-/// Runs `f(y, row)` over the rows of width `w` of `out`, with rayon.
-fn rows<T: Send>(out: &mut [T], w: usize, f: impl Fn(usize, &mut [T]) + Sync + Send) {
-    out.par_chunks_mut(w)
-        .enumerate()
-        .with_min_len(rows_per_task(w))
-        .for_each(|(y, row)| f(y, row));
-}
-
-/// Channels of one pixel of an [`ImageLevel`]: intensity in [0, 1], its x and y
-/// gradients, depth in metres (NaN when missing), its x and y gradients (NaN when a
-/// neighbour is missing), and two pad lanes so a pixel is 32 bytes.
-pub type Sample = [f32; 8];
-
-/// Index of the intensity channel in a [`Sample`].
-pub const I: usize = 0;
-/// Index of the depth channel in a [`Sample`].
-pub const D: usize = 3;
-
-/// The intensity gradient (`|Ix| + |Iy|`, intensity in [0, 1] per pixel: 2.5 gray
-/// levels a pixel) above which a pixel counts as textured.
-pub const TEXTURE_GRADIENT: f32 = 0.01;
-
-/// One level of the image pyramid, interleaved so that a bilinear lookup of all
-/// six channels touches four contiguous 32-byte pixels.
-#[derive(Clone, Debug, Default)]
-pub struct ImageLevel {
-    /// Intrinsics of this level.
-    pub camera: Option<Camera>,
-    /// `width * height` samples, row-major.
-    pub samples: Vec<Sample>,
-}
-
-impl ImageLevel {
-    /// The intrinsics of this level (set by preparation).
-    pub fn camera(&self) -> &Camera {
-        self.camera.as_ref().expect("level prepared")
-    }
-}
-
-/// The reference-side pixels of one coarse-to-fine step: back-projected points and
-/// their intensities, `[x, y, z, intensity]` in this frame's camera coordinates.
-#[derive(Clone, Debug, Default)]
-pub struct Template {
-    /// Pyramid level the points were taken from.
-    pub pyramid_level: usize,
-    /// Valid points of that level, every `stride`-th pixel.
-    pub points: Vec<[f32; 4]>,
-}
-
-/// A frame made ready for tracking: reusable as current, previous or reference.
-#[derive(Clone, Debug, Default)]
-pub struct PreparedFrame {
-    /// Capture time in seconds.
-    pub timestamp: f64,
-    /// Image pyramid, full resolution first.
-    pub levels: Vec<ImageLevel>,
-    /// Template points, one entry per step of the motion schedule.
-    pub templates: Vec<Template>,
-    /// Unit normals of the full-resolution pixels (NaN where unknown), oriented
-    /// towards the camera: the average of the axis and diagonal normals.
-    pub normals: Vec<[f32; 3]>,
-    /// Number of full-resolution pixels with depth after filtering.
-    pub valid_depth: usize,
-    /// Number of full-resolution pixels with depth whose intensity gradient
-    /// (`|Ix| + |Iy|`, intensity in [0, 1] per pixel) is at least [`TEXTURE_GRADIENT`]:
-    /// how much there is for the photometric residual to hold on to.
-    pub textured_pixels: usize,
-    /// Pixels the normal filter removed.
-    pub removed_by_normal: usize,
-    /// Pixels the contour filter removed.
-    pub removed_by_contour: usize,
-}
-
-impl PreparedFrame {
-    /// An empty frame with every buffer reserved at its full size for `config`, so
-    /// that preparing into it never allocates (frame pools create their frames so).
-    pub fn for_config(config: &Config) -> PreparedFrame {
-        let cams = level_cameras(config);
-        let levels = cams
-            .iter()
-            .map(|c| ImageLevel {
-                camera: Some(*c),
-                samples: Vec::with_capacity(c.pixels()),
-            })
-            .collect();
-        let templates = config
-            .motion
-            .levels
-            .iter()
-            .map(|l| Template {
-                pyramid_level: l.pyramid_level,
-                points: Vec::with_capacity(template_capacity(&cams[l.pyramid_level], l.stride)),
-            })
-            .collect();
-        PreparedFrame {
-            levels,
-            templates,
-            normals: Vec::with_capacity(config.camera.pixels()),
-            ..PreparedFrame::default()
-        }
-    }
-
-    /// Visits every `stride`-th valid full-resolution pixel as
-    /// `(point in camera coordinates, unit normal or NaN, intensity 0..=255)`.
-    pub fn for_each_point(&self, stride: usize, mut f: impl FnMut([f32; 3], [f32; 3], u8)) {
-        let Some(level) = self.levels.first() else {
-            return;
-        };
-        let cam = level.camera();
-        let (w, h) = (cam.width, cam.height);
-        let (fx, fy, cx, cy) = (cam.fx as f32, cam.fy as f32, cam.cx as f32, cam.cy as f32);
-        let stride = stride.max(1);
-        for y in (0..h).step_by(stride) {
-            for x in (0..w).step_by(stride) {
-                let s = &level.samples[y * w + x];
-                let z = s[D];
-                if z.is_finite() {
-                    let p = [(x as f32 - cx) / fx * z, (y as f32 - cy) / fy * z, z];
-                    let n = self
-                        .normals
-                        .get(y * w + x)
-                        .copied()
-                        .unwrap_or([f32::NAN; 3]);
-                    f(p, n, (s[I] * 255.0).round().clamp(0.0, 255.0) as u8);
-                }
-            }
-        }
-    }
-}
-
 /// Prepares frames for one camera and configuration, reusing its scratch buffers
 /// and the output's buffers so that a warm preparer does not allocate.
 #[derive(Clone, Debug)]
-pub struct Preparer {
+pub(super) struct OldPreparer {
     camera: Camera,
     filter: FilterConfig,
     schedule: Vec<MotionLevel>,
@@ -184,9 +29,9 @@ pub struct Preparer {
     spatial: Vec<f32>,
 }
 
-impl Preparer {
+impl OldPreparer {
     /// A preparer for `config` (validated by the caller).
-    pub fn new(config: &Config) -> Self {
+    pub(super) fn new(config: &Config) -> Self {
         let spatial = match config.filter.bilateral {
             Some(b) => {
                 let r = b.radius as isize;
@@ -201,7 +46,7 @@ impl Preparer {
             }
             None => Vec::new(),
         };
-        Preparer {
+        OldPreparer {
             camera: config.camera,
             filter: config.filter,
             schedule: config.motion.levels.clone(),
@@ -221,7 +66,11 @@ impl Preparer {
 
     /// Prepares `view` into `out`, reusing `out`'s buffers. Fails only on a frame
     /// whose sizes do not match the camera.
-    pub fn prepare_into(&mut self, view: FrameView<'_>, out: &mut PreparedFrame) -> Result<()> {
+    pub(super) fn prepare_into(
+        &mut self,
+        view: FrameView<'_>,
+        out: &mut PreparedFrame,
+    ) -> Result<()> {
         view.validate(&self.camera)?;
         let cam = self.camera;
         let n = cam.pixels();
@@ -591,34 +440,6 @@ fn gradients(level: &mut ImageLevel) {
     }
 }
 
-/// The intrinsics of every pyramid level of `config`, full resolution first.
-fn level_cameras(config: &Config) -> Vec<Camera> {
-    let mut cams = vec![config.camera];
-    for _ in 0..config.pyramid_depth() {
-        let half = cams[cams.len() - 1].half();
-        cams.push(half);
-    }
-    cams
-}
-
-/// The most template points a level of camera `c` sampled every `stride` pixels has.
-fn template_capacity(c: &Camera, stride: usize) -> usize {
-    let s = stride.max(1);
-    (c.width / s + 1) * (c.height / s + 1)
-}
-
-/// The most template points any step of `config`'s schedule can have.
-pub fn max_template_points(config: &Config) -> usize {
-    let cams = level_cameras(config);
-    config
-        .motion
-        .levels
-        .iter()
-        .map(|l| template_capacity(&cams[l.pyramid_level], l.stride))
-        .max()
-        .unwrap_or(0)
-}
-
 /// Every `stride`-th valid pixel of `level` (away from the border) as a template point.
 fn build_template(level: &ImageLevel, stride: usize, t: &mut Template) {
     let c = level.camera();
@@ -662,103 +483,4 @@ fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
 fn unit(a: [f32; 3]) -> Option<[f32; 3]> {
     let n = dot(a, a).sqrt();
     (n > 1e-12).then(|| [a[0] / n, a[1] / n, a[2] / n])
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::config::{Mode, Preset};
-
-    /// The bilateral filter as first written: pixel after pixel, its window clipped at
-    /// the image border.
-    fn clipped_reference(
-        depth: &[f32],
-        w: usize,
-        h: usize,
-        spatial: &[f32],
-        r: usize,
-        sr: f32,
-    ) -> Vec<f32> {
-        let side = 2 * r + 1;
-        let z0: Vec<f32> = depth
-            .iter()
-            .map(|&z| if z.is_finite() { z } else { 0.0 })
-            .collect();
-        let mut out = vec![f32::NAN; w * h];
-        for y in 0..h {
-            for x in 0..w {
-                let zc = z0[y * w + x];
-                if zc == 0.0 {
-                    continue;
-                }
-                let s = sr * zc;
-                let quarter_inv = 0.25 / (2.0 * s * s);
-                let (mut acc, mut wsum) = (0.0f32, 0.0f32);
-                for yy in y.saturating_sub(r)..=(y + r).min(h - 1) {
-                    for xx in x.saturating_sub(r)..=(x + r).min(w - 1) {
-                        let z = z0[yy * w + xx];
-                        let d = z - zc;
-                        let t = (1.0 - d * d * quarter_inv).max(0.0);
-                        let t2 = t * t;
-                        let wgt = spatial[(yy + r - y) * side + (xx + r - x)] * t2 * t2;
-                        acc += wgt * z;
-                        wsum += wgt;
-                    }
-                }
-                out[y * w + x] = acc / wsum;
-            }
-        }
-        out
-    }
-
-    #[test]
-    fn blocked_bilateral_equals_the_clipped_filter_bit_for_bit() {
-        // Sizes around the 64-pixel blocks, holes, depth steps and slopes.
-        for (w, h, r, sr) in [
-            (37, 23, 1, 0.02),
-            (150, 41, 2, 0.02),
-            (64, 9, 3, 0.05),
-            (129, 17, 2, 0.35),
-        ] {
-            let camera = crate::Camera {
-                width: w,
-                height: h,
-                fx: 100.0,
-                fy: 100.0,
-                cx: w as f64 / 2.0,
-                cy: h as f64 / 2.0,
-                depth_scale: 1000.0,
-            };
-            let mut config = Config::new(camera, Preset::Pc, Mode::L2);
-            config.filter.bilateral = Some(crate::config::BilateralConfig {
-                radius: r,
-                sigma_space_px: 1.5,
-                sigma_depth_rel: sr,
-            });
-            let mut p = Preparer::new(&config);
-            let mut seed = 12345u32;
-            p.depth = (0..w * h)
-                .map(|i| {
-                    seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                    let (x, y) = (i % w, i / w);
-                    if seed >> 28 == 0 || x == 5 {
-                        f32::NAN
-                    } else {
-                        let step = if x > w / 2 { 1.2 } else { 0.0 };
-                        0.8 + 0.01 * y as f32 + step + (seed >> 8) as f32 * 1e-9
-                    }
-                })
-                .collect();
-            p.smoothed = vec![0.0; w * h];
-            p.bilateral(r, sr);
-            let want = clipped_reference(&p.depth, w, h, &p.spatial, r, sr);
-            for (i, (a, b)) in p.smoothed.iter().zip(&want).enumerate() {
-                assert_eq!(
-                    a.to_bits(),
-                    b.to_bits(),
-                    "{w}x{h} r {r}: pixel {i}: {a} vs {b}"
-                );
-            }
-        }
-    }
 }

@@ -1,0 +1,418 @@
+//! Frame preparation: the filter stage of the paper (section 4.2, Figure 4).
+//!
+//! Raw depth is converted to metres, smoothed by a bilateral filter over valid
+//! pixels only, then two removal filters drop unreliable pixels:
+//!
+//! - **normal-based removal** (εn): two normals from divided differences of the
+//!   back-projected points, one along the principal axes and one along the
+//!   diagonals; a pixel whose two normals differ by more than εn is dropped,
+//!   otherwise their average is its normal;
+//! - **contour-based removal** (εg): where the cross-product normal
+//!   `(p(u-1,0) - p(u)) × (p(u,-1) - p(u))` makes an angle within `90° ± εg` with
+//!   the viewing ray `p(u)`, the 3x3 neighbourhood is dropped.
+//!
+//! Both masks are computed on the same smoothed depth and applied together. The
+//! result feeds an image pyramid (2x2 mean intensity, 2x2 mean of agreeing valid
+//! depths), per-level gradients, and per-schedule-step template points. A frame is
+//! prepared once and reused when it becomes the previous or a reference frame.
+//!
+//! The work is a few passes, each reading what the last one wrote and nothing else:
+//!
+//! 1. raw depth to metres, into a zero-padded buffer ([`bilateral::load_padded`]);
+//! 2. the bilateral filter ([`bilateral`]), row-parallel;
+//! 3. back-projection, both normals and the contour test in one pass
+//!    ([`removal::normals_and_seeds`]), row-parallel: the points are recomputed from
+//!    the smoothed depth where they are needed, never stored;
+//! 4. the masks applied (the contour seeds dilated 3x3 on the fly) into compact
+//!    intensity and depth planes of level 0 ([`removal::apply_masks`]);
+//! 5. per level, the interleaved samples with their gradients, written once from
+//!    the compact planes, and the next level's planes ([`pyramid`]);
+//! 6. the templates.
+//!
+//! The per-pixel kernels are written branch-free over whole rows so that the
+//! compiler vectorises them (SSE2 on x86_64, NEON on aarch64); on x86_64 the two
+//! heavy ones are compiled a second time for AVX2 and picked at run time
+//! ([`simd`]). Every pixel goes through the same IEEE operations in the same order
+//! as in a scalar loop (no fused multiply-add), so the output is the same bit for
+//! bit on every path.
+
+use crate::camera::{Camera, FrameView};
+use crate::config::{Config, FilterConfig, MotionLevel};
+use crate::error::Result;
+
+use rayon::prelude::*;
+
+mod bilateral;
+mod pyramid;
+#[cfg(test)]
+mod reference;
+mod removal;
+mod simd;
+#[cfg(test)]
+mod tests;
+
+/// Fewest pixels one rayon task of a row-parallel loop takes. Handing work to
+/// another thread costs tens of microseconds, so an image is only split when each
+/// part has at least this many pixels: a 640x480 image into four tasks, a 320x240
+/// one not at all. Every output pixel depends only on the inputs, never on the
+/// order of the rows, so the result is the same whatever the number of threads.
+const PIXELS_PER_TASK: usize = 65536;
+
+/// Rows of width `w` per rayon task.
+fn rows_per_task(w: usize) -> usize {
+    PIXELS_PER_TASK.div_ceil(w.max(1))
+}
+
+/// Runs `f(y, row)` over the rows of width `w` of `out`, with rayon.
+fn rows<T: Send>(out: &mut [T], w: usize, f: impl Fn(usize, &mut [T]) + Sync + Send) {
+    out.par_chunks_mut(w)
+        .enumerate()
+        .with_min_len(rows_per_task(w))
+        .for_each(|(y, row)| f(y, row));
+}
+
+/// Channels of one pixel of an [`ImageLevel`]: intensity in [0, 1], its x and y
+/// gradients, depth in metres (NaN when missing), its x and y gradients (NaN when a
+/// neighbour is missing), and two pad lanes so a pixel is 32 bytes.
+pub type Sample = [f32; 8];
+
+/// Index of the intensity channel in a [`Sample`].
+pub const I: usize = 0;
+/// Index of the depth channel in a [`Sample`].
+pub const D: usize = 3;
+
+/// The intensity gradient (`|Ix| + |Iy|`, intensity in [0, 1] per pixel: 2.5 gray
+/// levels a pixel) above which a pixel counts as textured.
+pub const TEXTURE_GRADIENT: f32 = 0.01;
+
+/// One level of the image pyramid, interleaved so that a bilinear lookup of all
+/// six channels touches four contiguous 32-byte pixels.
+#[derive(Clone, Debug, Default)]
+pub struct ImageLevel {
+    /// Intrinsics of this level.
+    pub camera: Option<Camera>,
+    /// `width * height` samples, row-major.
+    pub samples: Vec<Sample>,
+}
+
+impl ImageLevel {
+    /// The intrinsics of this level (set by preparation).
+    pub fn camera(&self) -> &Camera {
+        self.camera.as_ref().expect("level prepared")
+    }
+}
+
+/// The reference-side pixels of one coarse-to-fine step: back-projected points and
+/// their intensities, `[x, y, z, intensity]` in this frame's camera coordinates.
+#[derive(Clone, Debug, Default)]
+pub struct Template {
+    /// Pyramid level the points were taken from.
+    pub pyramid_level: usize,
+    /// Valid points of that level, every `stride`-th pixel.
+    pub points: Vec<[f32; 4]>,
+}
+
+/// A frame made ready for tracking: reusable as current, previous or reference.
+#[derive(Clone, Debug, Default)]
+pub struct PreparedFrame {
+    /// Capture time in seconds.
+    pub timestamp: f64,
+    /// Image pyramid, full resolution first.
+    pub levels: Vec<ImageLevel>,
+    /// Template points, one entry per step of the motion schedule.
+    pub templates: Vec<Template>,
+    /// Unit normals of the full-resolution pixels (NaN where unknown), oriented
+    /// towards the camera: the average of the axis and diagonal normals.
+    pub normals: Vec<[f32; 3]>,
+    /// Number of full-resolution pixels with depth after filtering.
+    pub valid_depth: usize,
+    /// Number of full-resolution pixels with depth whose intensity gradient
+    /// (`|Ix| + |Iy|`, intensity in [0, 1] per pixel) is at least [`TEXTURE_GRADIENT`]:
+    /// how much there is for the photometric residual to hold on to.
+    pub textured_pixels: usize,
+    /// Pixels the normal filter removed.
+    pub removed_by_normal: usize,
+    /// Pixels the contour filter removed.
+    pub removed_by_contour: usize,
+}
+
+impl PreparedFrame {
+    /// An empty frame with every buffer reserved at its full size for `config`, so
+    /// that preparing into it never allocates (frame pools create their frames so).
+    pub fn for_config(config: &Config) -> PreparedFrame {
+        let cams = level_cameras(config);
+        let levels = cams
+            .iter()
+            .map(|c| ImageLevel {
+                camera: Some(*c),
+                samples: Vec::with_capacity(c.pixels()),
+            })
+            .collect();
+        let templates = config
+            .motion
+            .levels
+            .iter()
+            .map(|l| Template {
+                pyramid_level: l.pyramid_level,
+                points: Vec::with_capacity(template_capacity(&cams[l.pyramid_level], l.stride)),
+            })
+            .collect();
+        PreparedFrame {
+            levels,
+            templates,
+            normals: Vec::with_capacity(config.camera.pixels()),
+            ..PreparedFrame::default()
+        }
+    }
+
+    /// Visits every `stride`-th valid full-resolution pixel as
+    /// `(point in camera coordinates, unit normal or NaN, intensity 0..=255)`.
+    pub fn for_each_point(&self, stride: usize, mut f: impl FnMut([f32; 3], [f32; 3], u8)) {
+        let Some(level) = self.levels.first() else {
+            return;
+        };
+        let cam = level.camera();
+        let (w, h) = (cam.width, cam.height);
+        let (fx, fy, cx, cy) = (cam.fx as f32, cam.fy as f32, cam.cx as f32, cam.cy as f32);
+        let stride = stride.max(1);
+        for y in (0..h).step_by(stride) {
+            for x in (0..w).step_by(stride) {
+                let s = &level.samples[y * w + x];
+                let z = s[D];
+                if z.is_finite() {
+                    let p = [(x as f32 - cx) / fx * z, (y as f32 - cy) / fy * z, z];
+                    let n = self
+                        .normals
+                        .get(y * w + x)
+                        .copied()
+                        .unwrap_or([f32::NAN; 3]);
+                    f(p, n, (s[I] * 255.0).round().clamp(0.0, 255.0) as u8);
+                }
+            }
+        }
+    }
+}
+
+/// Prepares frames for one camera and configuration, reusing its scratch buffers
+/// and the output's buffers so that a warm preparer does not allocate.
+#[derive(Clone, Debug)]
+pub struct Preparer {
+    camera: Camera,
+    filter: FilterConfig,
+    schedule: Vec<MotionLevel>,
+    pyramid_depth: usize,
+    /// Depth in metres, missing as 0, padded by the bilateral radius on every side.
+    padded_depth: Vec<f32>,
+    /// Smoothed depth in metres, NaN where missing.
+    smoothed: Vec<f32>,
+    /// Bilateral spatial weights, row-major over the window.
+    spatial: Vec<f32>,
+    /// `(x - cx) / fx` per column and `(y - cy) / fy` per row of level 0.
+    ray_x: Vec<f32>,
+    ray_y: Vec<f32>,
+    /// Per pixel: dropped by the normal filter (1) or not (0).
+    normal_drop: Vec<u8>,
+    /// Per pixel: the contour test fired (1) or not (0).
+    contour_seed: Vec<u8>,
+    /// Two rows of masks for applying them.
+    mask_rows: Vec<u8>,
+    /// Compact intensity (in [0, 1]) and filtered depth (NaN where missing) of every
+    /// pyramid level, full resolution first.
+    planes: Vec<pyramid::Planes>,
+}
+
+impl Preparer {
+    /// A preparer for `config` (validated by the caller).
+    pub fn new(config: &Config) -> Self {
+        let spatial = match config.filter.bilateral {
+            Some(b) => {
+                let r = b.radius as isize;
+                let s2 = 2.0 * b.sigma_space_px * b.sigma_space_px;
+                let mut v = Vec::new();
+                for dy in -r..=r {
+                    for dx in -r..=r {
+                        v.push((-((dx * dx + dy * dy) as f32) / s2).exp());
+                    }
+                }
+                v
+            }
+            None => Vec::new(),
+        };
+        let c = config.camera;
+        let (ifx, ify, cx, cy) = (
+            1.0 / c.fx as f32,
+            1.0 / c.fy as f32,
+            c.cx as f32,
+            c.cy as f32,
+        );
+        Preparer {
+            camera: c,
+            filter: config.filter,
+            schedule: config.motion.levels.clone(),
+            pyramid_depth: config.pyramid_depth(),
+            padded_depth: Vec::new(),
+            smoothed: Vec::new(),
+            spatial,
+            ray_x: (0..c.width).map(|x| (x as f32 - cx) * ifx).collect(),
+            ray_y: (0..c.height).map(|y| (y as f32 - cy) * ify).collect(),
+            normal_drop: Vec::new(),
+            contour_seed: Vec::new(),
+            mask_rows: Vec::new(),
+            planes: Vec::new(),
+        }
+    }
+
+    /// Prepares `view` into `out`, reusing `out`'s buffers. Fails only on a frame
+    /// whose sizes do not match the camera.
+    pub fn prepare_into(&mut self, view: FrameView<'_>, out: &mut PreparedFrame) -> Result<()> {
+        view.validate(&self.camera)?;
+        let cam = self.camera;
+        let (w, h) = (cam.width, cam.height);
+        out.timestamp = view.timestamp;
+
+        // Raw units to metres (out-of-range depth is missing), smoothed.
+        let range = bilateral::DepthRange {
+            scale: 1.0 / cam.depth_scale as f32,
+            lo: self.filter.min_depth_m as f32,
+            hi: self.filter.max_depth_m as f32,
+        };
+        self.smoothed.resize(w * h, f32::NAN);
+        match self.filter.bilateral {
+            Some(b) => {
+                bilateral::load_padded(view.depth, w, h, b.radius, range, &mut self.padded_depth);
+                bilateral::filter(
+                    &self.padded_depth,
+                    &self.spatial,
+                    w,
+                    b.radius,
+                    b.sigma_depth_rel,
+                    &mut self.smoothed,
+                );
+            }
+            None => bilateral::load_plain(view.depth, range, &mut self.smoothed),
+        }
+
+        // Normals, normal-based and contour-based removal.
+        let angles = removal::Angles {
+            cos_n: self
+                .filter
+                .normal_max_angle_deg
+                .map(|a| (a.to_radians().cos()) as f32),
+            sin_g: self
+                .filter
+                .contour_angle_deg
+                .map(|a| (a.to_radians().sin()) as f32),
+        };
+        removal::normals_and_seeds(
+            &self.smoothed,
+            &self.ray_x,
+            &self.ray_y,
+            angles,
+            &mut out.normals,
+            &mut self.normal_drop,
+            &mut self.contour_seed,
+        );
+        self.planes
+            .resize_with(self.pyramid_depth + 1, pyramid::Planes::default);
+        let counts = removal::apply_masks(
+            view.intensity,
+            &self.smoothed,
+            &self.normal_drop,
+            &self.contour_seed,
+            w,
+            angles.cos_n.is_some(),
+            &mut out.normals,
+            &mut self.planes[0],
+            &mut self.mask_rows,
+        );
+        out.removed_by_normal = counts.by_normal;
+        out.removed_by_contour = counts.by_contour;
+        out.valid_depth = counts.valid;
+
+        // The pyramid, its samples and the templates.
+        out.levels
+            .resize_with(self.pyramid_depth + 1, ImageLevel::default);
+        let mut level_cam = cam;
+        for l in 0..=self.pyramid_depth {
+            if l > 0 {
+                let (head, tail) = self.planes.split_at_mut(l);
+                pyramid::downsample(
+                    &head[l - 1],
+                    level_cam.width,
+                    &mut tail[0],
+                    level_cam.half(),
+                );
+                level_cam = level_cam.half();
+            }
+            let level = &mut out.levels[l];
+            level.camera = Some(level_cam);
+            let textured = pyramid::samples(&self.planes[l], level_cam.width, &mut level.samples);
+            if l == 0 {
+                out.textured_pixels = textured;
+            }
+        }
+        out.templates
+            .resize_with(self.schedule.len(), Template::default);
+        for (step, t) in self.schedule.iter().zip(&mut out.templates) {
+            let l = step.pyramid_level;
+            build_template(&self.planes[l], out.levels[l].camera(), step.stride, t);
+        }
+        Ok(())
+    }
+}
+
+/// The intrinsics of every pyramid level of `config`, full resolution first.
+fn level_cameras(config: &Config) -> Vec<Camera> {
+    let mut cams = vec![config.camera];
+    for _ in 0..config.pyramid_depth() {
+        let half = cams[cams.len() - 1].half();
+        cams.push(half);
+    }
+    cams
+}
+
+/// The most template points a level of camera `c` sampled every `stride` pixels has.
+fn template_capacity(c: &Camera, stride: usize) -> usize {
+    let s = stride.max(1);
+    (c.width / s + 1) * (c.height / s + 1)
+}
+
+/// The most template points any step of `config`'s schedule can have.
+pub fn max_template_points(config: &Config) -> usize {
+    let cams = level_cameras(config);
+    config
+        .motion
+        .levels
+        .iter()
+        .map(|l| template_capacity(&cams[l.pyramid_level], l.stride))
+        .max()
+        .unwrap_or(0)
+}
+
+/// Every `stride`-th valid pixel of a level with camera `c` and planes `p` (away
+/// from the border) as a template point.
+#[inline(never)]
+fn build_template(p: &pyramid::Planes, c: &Camera, stride: usize, t: &mut Template) {
+    let (w, h) = (c.width, c.height);
+    let (ifx, ify, cx, cy) = (
+        1.0 / c.fx as f32,
+        1.0 / c.fy as f32,
+        c.cx as f32,
+        c.cy as f32,
+    );
+    t.points.clear();
+    let start = (stride / 2).max(1);
+    for y in (start..h - 1).step_by(stride) {
+        let ry = (y as f32 - cy) * ify;
+        let (zr, ir) = (
+            &p.depth[y * w..(y + 1) * w],
+            &p.intensity[y * w..(y + 1) * w],
+        );
+        for x in (start..w - 1).step_by(stride) {
+            let z = zr[x];
+            if z.is_finite() {
+                t.points.push([(x as f32 - cx) * ifx * z, ry * z, z, ir[x]]);
+            }
+        }
+    }
+}
