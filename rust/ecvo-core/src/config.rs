@@ -263,9 +263,8 @@ pub struct MotionConfig {
     pub levels: Vec<MotionLevel>,
     /// Stop a step when the update's translation (m) and rotation (rad) are both
     /// below this times 2^L, L the step's pyramid level (a pixel there spans 2^L
-    /// full-resolution ones). 1e-5 by default (1e-6 took 16 % more time with the
-    /// pyramid, median of 5 alternating runs, for the same ATE on the suite); the
-    /// paper preset keeps 1e-6.
+    /// full-resolution ones). 1e-5 by default; the paper preset keeps 1e-6, which
+    /// costs 16 % more time with the pyramid for the same accuracy.
     pub min_update: f64,
     /// A result with fewer valid residuals than this at the finest level failed.
     pub min_valid_pixels: usize,
