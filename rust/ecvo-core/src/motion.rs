@@ -260,12 +260,6 @@ pub const MIN_CHUNKS_PER_TASK: usize = 2;
 /// Most fixed-point passes of one scale fit.
 const MAX_SCALE_PASSES: usize = 20;
 
-/// Fixed-point passes of a warm-started scale fit (the previous iteration's Σ): the
-/// scale is re-fitted every Gauss-Newton iteration, so it converges along with the
-/// pose. Fitting it to 0.1 % every time took 7 passes on average on fr1/xyz and cost
-/// 13 % more time for the same trajectory.
-const MAX_WARM_SCALE_PASSES: usize = 3;
-
 /// The settings of one `MOTION` call, in the form the per-pixel loops use.
 #[derive(Clone, Copy, Debug)]
 struct Params {
@@ -564,11 +558,8 @@ impl MotionEstimator {
                 wh = scale.whitener(p.nu);
             }
             cost = self.cost(&wh) / n as f64;
-            // A pixel of pyramid level L spans 2^L full-resolution pixels: the update
-            // that no longer matters grows with it.
-            let min_update = cfg.min_update * f64::from(1u32 << step.pyramid_level.min(16));
-            let small = delta.fixed_rows::<3>(0).norm() < min_update
-                && delta.fixed_rows::<3>(3).norm() < min_update;
+            let small = delta.fixed_rows::<3>(0).norm() < cfg.min_update
+                && delta.fixed_rows::<3>(3).norm() < cfg.min_update;
             if small {
                 out.hit_max = false;
                 break;
@@ -639,13 +630,11 @@ impl MotionEstimator {
             two += t;
             one += o;
         }
-        let (mut s, passes) = match start {
-            Some(s) if s.ii > 0.0 && s.zz > 0.0 && s.ii.is_finite() && s.zz.is_finite() => {
-                (s, MAX_WARM_SCALE_PASSES)
-            }
-            _ => (scale::initial_scale(chunks, p.weighting)?, MAX_SCALE_PASSES),
+        let mut s = match start {
+            Some(s) if s.ii > 0.0 && s.zz > 0.0 && s.ii.is_finite() && s.zz.is_finite() => s,
+            _ => scale::initial_scale(chunks, p.weighting)?,
         };
-        for _ in 0..passes {
+        for _ in 0..MAX_SCALE_PASSES {
             let wh = s.whitener(p.nu);
             let weighting = p.weighting;
             map_chunks(chunks, &mut self.sums, |c| scale::pass(c, &wh, weighting));
