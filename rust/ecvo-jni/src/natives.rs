@@ -305,7 +305,10 @@ fn native_trajectory_since<'local>(
     run(env, |env| {
         let t = tracker(handle)?;
         let from = usize::try_from(from).map_err(|_| bad(format!("from: {from} is negative")))?;
-        doubles(env, &trajectory_since(&t.pipeline.trajectory(), from))
+        doubles(
+            env,
+            &trajectory_since(&t.pipeline.trajectory_since(from), 0),
+        )
     })
 }
 

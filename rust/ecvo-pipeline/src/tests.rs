@@ -343,8 +343,15 @@ fn non_increasing_timestamps_are_refused_and_counted_and_the_pipeline_goes_on() 
         assert_eq!(st.timestamps_rejected, 2, "{st:?}");
         assert_eq!(st.pushed, 4);
         assert_eq!(st.tracked + st.dropped, 4);
-        let stamps: Vec<f64> = p.trajectory().iter().map(|r| r.timestamp).collect();
+        let all = p.trajectory();
+        let stamps: Vec<f64> = all.iter().map(|r| r.timestamp).collect();
         assert!(stamps.windows(2).all(|w| w[0] < w[1]), "{stamps:?}");
+        // The incremental read returns exactly the tail, and nothing past the end.
+        assert!(all.len() >= 2, "{}", all.len());
+        for from in 0..=all.len() + 2 {
+            let want = all.get(from..).unwrap_or(&[]);
+            assert_eq!(p.trajectory_since(from), want, "from {from}");
+        }
         p.finish().unwrap();
     }
 }

@@ -1,0 +1,272 @@
+//! The state the stages and the caller share: raw-frame pool, queues, progress,
+//! timers, the published poses, and the input checks.
+
+use super::*;
+
+/// One raw input frame in the input pool.
+pub(crate) struct RawFrame {
+    pub(crate) sequence: u64,
+    pub(crate) timestamp: f64,
+    pub(crate) pushed_at: Instant,
+    pub(crate) intensity: Vec<u8>,
+    pub(crate) depth: Vec<u16>,
+}
+
+pub(crate) struct RawPool {
+    pub(crate) free: Vec<RawFrame>,
+}
+
+/// A reference frame on its way to the geometry stage.
+pub(crate) struct GeometryItem {
+    pub(crate) frame: PooledFrame,
+    pub(crate) pose: Pose,
+}
+
+#[derive(Default)]
+pub(crate) struct Progress {
+    pub(crate) pushed: u64,
+    pub(crate) tracked: u64,
+    pub(crate) dropped_at_input: u64,
+    pub(crate) dropped_at_tracker: u64,
+    pub(crate) failed_preparations: u64,
+    pub(crate) geometry_sent: u64,
+    pub(crate) geometry_done: u64,
+    pub(crate) geometry_skipped: u64,
+    pub(crate) outputs_discarded: u64,
+    pub(crate) ahead_computed: u64,
+    pub(crate) ahead_used: u64,
+    pub(crate) timestamps_rejected: u64,
+    pub(crate) repeated_frames: u64,
+    pub(crate) first_push: Option<Instant>,
+    pub(crate) last_tracked: Option<Instant>,
+}
+
+impl Progress {
+    /// Frames that need nothing more from the filter and tracker.
+    pub(crate) fn settled(&self) -> u64 {
+        self.tracked + self.dropped_at_input + self.dropped_at_tracker + self.failed_preparations
+    }
+}
+
+#[derive(Default)]
+pub(crate) struct Timers {
+    pub(crate) filter: Mutex<Histogram>,
+    pub(crate) tracker: Mutex<Histogram>,
+    pub(crate) geometry: Mutex<Histogram>,
+    pub(crate) latency: Mutex<Histogram>,
+}
+
+/// State shared by the caller and the stage threads.
+pub(crate) struct Shared {
+    pub(crate) camera: Camera,
+    pub(crate) levels: usize,
+    pub(crate) admission: Admission,
+    pub(crate) geometry: Option<GeometryOptions>,
+    pub(crate) keep_trajectory: bool,
+    #[cfg(any(test, feature = "test-hooks"))]
+    pub(crate) hooks: TestHooks,
+
+    pub(crate) abort: AtomicBool,
+    pub(crate) input_closed: AtomicBool,
+    pub(crate) failure: Mutex<Option<Error>>,
+    pub(crate) next_sequence: AtomicU64,
+    /// The last frame accepted by `push`: its timestamp and content hash.
+    pub(crate) last_input: Mutex<LastInput>,
+
+    pub(crate) raw: Mutex<RawPool>,
+    pub(crate) raw_freed: Condvar,
+    pub(crate) input: Queue<RawFrame>,
+    pub(crate) prepared: Queue<PooledFrame>,
+    pub(crate) to_geometry: Queue<GeometryItem>,
+    pub(crate) frames: Arc<FramePool>,
+
+    pub(crate) progress: Mutex<Progress>,
+    pub(crate) progress_changed: Condvar,
+    pub(crate) latest: Mutex<LatestPose>,
+    /// The tracker's velocity after its last frame: that frame's sequence and [A]
+    /// (motion and interval) when it registered frame to frame. The filter stage
+    /// restarts its [A]-ahead chain from it.
+    pub(crate) velocity: Mutex<Published>,
+    pub(crate) counters: Mutex<Counters>,
+    pub(crate) trajectory: Mutex<Vec<PoseRecord>>,
+    pub(crate) references: Mutex<Vec<PoseRecord>>,
+    pub(crate) cloud: Option<Mutex<Cloud>>,
+    pub(crate) timers: Timers,
+}
+
+/// What `push` remembers of the last frame it accepted (queued or repeated).
+#[derive(Default)]
+pub(crate) struct LastInput {
+    pub(crate) timestamp: Option<f64>,
+    pub(crate) hash: Option<u64>,
+}
+
+/// A 64-bit hash of a frame's intensity and depth, to tell a frame bit-identical to
+/// the previous one (two different frames collide with probability about 2^-64). Four
+/// independent lanes of multiply-rotate over 8-byte words.
+pub(crate) fn frame_hash(intensity: &[u8], depth: &[u16]) -> u64 {
+    const K: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut lanes = [K, K ^ 1, K ^ 2, K ^ 3];
+    let mut mix = |i: usize, w: u64| {
+        lanes[i & 3] = (lanes[i & 3] ^ w).wrapping_mul(K).rotate_left(29);
+    };
+    let words = intensity.chunks_exact(8);
+    let tail = words.remainder();
+    let mut n = 0;
+    for w in words {
+        mix(
+            n,
+            u64::from_le_bytes([w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]]),
+        );
+        n += 1;
+    }
+    for &b in tail {
+        mix(n, u64::from(b) | 1 << 63);
+        n += 1;
+    }
+    let words = depth.chunks_exact(4);
+    let tail = words.remainder();
+    for w in words {
+        mix(
+            n,
+            u64::from(w[0]) | u64::from(w[1]) << 16 | u64::from(w[2]) << 32 | u64::from(w[3]) << 48,
+        );
+        n += 1;
+    }
+    for &d in tail {
+        mix(n, u64::from(d) | 1 << 62);
+        n += 1;
+    }
+    let h = lanes.iter().fold(
+        intensity.len() as u64 ^ (depth.len() as u64) << 32,
+        |h, &l| (h ^ l).wrapping_mul(K).rotate_left(31),
+    );
+    h ^ h >> 32
+}
+
+impl Shared {
+    /// Fails (and counts) if `timestamp` is not after the last accepted frame's.
+    pub(crate) fn check_timestamp(&self, last: &LastInput, timestamp: f64) -> Result<()> {
+        match last.timestamp {
+            Some(previous) if timestamp <= previous => {
+                self.update_progress(|p| p.timestamps_rejected += 1);
+                Err(Error::TimestampNotIncreasing {
+                    previous,
+                    timestamp,
+                })
+            }
+            _ => Ok(()),
+        }
+    }
+
+    pub(crate) fn aborted(&self) -> bool {
+        self.abort.load(Ordering::Acquire)
+    }
+
+    /// The error to report once the pipeline no longer takes frames.
+    pub(crate) fn stopped_error(&self) -> Error {
+        lock(&self.failure).clone().unwrap_or(Error::Closed)
+    }
+
+    pub(crate) fn check_failure(&self) -> Result<()> {
+        match &*lock(&self.failure) {
+            Some(e) => Err(e.clone()),
+            None => Ok(()),
+        }
+    }
+
+    pub(crate) fn update_progress(&self, f: impl FnOnce(&mut Progress)) {
+        f(&mut lock(&self.progress));
+        self.progress_changed.notify_all();
+    }
+
+    /// Stops everything: no stage waits for another once this returns.
+    pub(crate) fn abort(&self) {
+        self.abort.store(true, Ordering::Release);
+        self.input.close();
+        self.prepared.close();
+        self.to_geometry.close();
+        self.frames.wake_all();
+        {
+            let _g = lock(&self.raw);
+            self.raw_freed.notify_all();
+        }
+        self.update_progress(|_| {});
+    }
+
+    pub(crate) fn fail(&self, stage: Stage, message: String) {
+        log::error!("ecvo-pipeline: the {stage} stage panicked: {message}");
+        lock(&self.failure).get_or_insert(Error::StagePanicked { stage, message });
+        self.abort();
+    }
+
+    /// A free raw frame; in live mode, when none is free, the oldest queued one is
+    /// taken back (and counted as dropped). Returns whether one was dropped.
+    pub(crate) fn take_raw(&self) -> Result<(RawFrame, bool)> {
+        let mut g = lock(&self.raw);
+        loop {
+            if self.aborted() || self.input_closed.load(Ordering::Acquire) {
+                return Err(self.stopped_error());
+            }
+            if let Some(r) = g.free.pop() {
+                return Ok((r, false));
+            }
+            if self.admission == Admission::Live {
+                drop(g);
+                if let Some(old) = self.input.try_pop() {
+                    self.update_progress(|p| p.dropped_at_input += 1);
+                    return Ok((old, true));
+                }
+                g = lock(&self.raw);
+                continue;
+            }
+            g = self
+                .raw_freed
+                .wait_timeout(g, Duration::from_millis(50))
+                .unwrap_or_else(|e| e.into_inner())
+                .0;
+        }
+    }
+
+    pub(crate) fn give_raw(&self, raw: RawFrame) {
+        lock(&self.raw).free.push(raw);
+        self.raw_freed.notify_one();
+    }
+
+    #[cfg(any(test, feature = "test-hooks"))]
+    pub(crate) fn hook(&self, stage: Stage, sequence: u64) {
+        if let Some((s, d)) = self.hooks.delay
+            && s == stage
+        {
+            std::thread::sleep(d);
+        }
+        if self.hooks.panic_at == Some((stage, sequence)) {
+            panic!("injected panic in the {stage} stage at frame {sequence}");
+        }
+    }
+
+    #[cfg(not(any(test, feature = "test-hooks")))]
+    #[inline(always)]
+    pub(crate) fn hook(&self, _stage: Stage, _sequence: u64) {}
+}
+
+/// Returns raw frames to the pool if `fill` panics.
+pub(crate) struct RawGuard<'a> {
+    pub(crate) shared: &'a Shared,
+    pub(crate) raw: Option<RawFrame>,
+}
+
+impl Drop for RawGuard<'_> {
+    fn drop(&mut self) {
+        if let Some(r) = self.raw.take() {
+            self.shared.give_raw(r);
+        }
+    }
+}
+
+/// Counts the rayon workers still alive, so that dropping the pipeline can wait
+/// for them (a dropped `rayon::ThreadPool` does not join its threads).
+pub(crate) struct WorkerCount {
+    pub(crate) alive: Mutex<usize>,
+    pub(crate) exited: Condvar,
+}
