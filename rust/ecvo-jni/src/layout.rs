@@ -68,15 +68,10 @@ pub fn pose_doubles(r: &PoseRecord) -> [f64; POSE_STRIDE] {
     [r.timestamp, t.x, t.y, t.z, q.i, q.j, q.k, q.w]
 }
 
-/// The 8 doubles per pose of the records from index `from` on (`nativeTrajectorySince`);
-/// empty when `from` is at or past the end.
-pub fn trajectory_since(records: &[PoseRecord], from: usize) -> Vec<f64> {
-    records
-        .get(from..)
-        .unwrap_or(&[])
-        .iter()
-        .flat_map(pose_doubles)
-        .collect()
+/// The 8 doubles per pose of `records`, in order (`nativeTrajectorySince` gets them from
+/// `Pipeline::trajectory_since`).
+pub fn poses_doubles(records: &[PoseRecord]) -> Vec<f64> {
+    records.iter().flat_map(pose_doubles).collect()
 }
 
 /// The 14 doubles of `nativeStats` (layout in `TrackerStats.kt`).

@@ -9,7 +9,7 @@ use jni::{Env, NativeMethod};
 use crate::config::InitArgs;
 use crate::error::{Failure, bad, run};
 use crate::frames::{PlaneLayout, array_len, copy_plane, direct};
-use crate::layout::trajectory_since;
+use crate::layout::poses_doubles;
 use crate::layout::{
     NO_POSE, REFERENCE_STRIDE, cloud_floats, pose_doubles, pose_matrix, stats_doubles,
 };
@@ -305,10 +305,7 @@ fn native_trajectory_since<'local>(
     run(env, |env| {
         let t = tracker(handle)?;
         let from = usize::try_from(from).map_err(|_| bad(format!("from: {from} is negative")))?;
-        doubles(
-            env,
-            &trajectory_since(&t.pipeline.trajectory_since(from), 0),
-        )
+        doubles(env, &poses_doubles(&t.pipeline.trajectory_since(from)))
     })
 }
 
