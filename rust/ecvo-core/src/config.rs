@@ -308,6 +308,12 @@ pub struct Config {
     /// removes drift, which is small against the sensor noise; a large move means it
     /// converged somewhere else. `f64::INFINITY` accepts every correction.
     pub max_correction_distance: f64,
+    /// A frame whose registration implies a camera speed above this (translation
+    /// from the previous frame over the time between their timestamps, m/s) is not
+    /// believed: it is treated as a failed [A] (recovery, then lost). A hand-held or
+    /// head-mounted camera stays well below 4 m/s; an unannounced zoom or a
+    /// teleport reads as tens of m/s. `f64::INFINITY` believes every speed.
+    pub max_speed_m_s: f64,
     /// A frame becomes an anchor after a loss only with at least this fraction of
     /// its pixels carrying depth after filtering.
     pub min_anchor_depth_fraction: f64,
@@ -368,6 +374,7 @@ impl Config {
             reference_levels: levels[..used].to_vec(),
             max_lost_frames: 10,
             max_correction_distance: 100.0,
+            max_speed_m_s: 4.0,
             min_anchor_depth_fraction: 0.05,
             min_anchor_texture_fraction: 0.02,
         }
@@ -384,6 +391,7 @@ impl Config {
         c.motion.depth_noise = DepthNoiseModel::Constant;
         c.motion.prior = MotionPrior::Identity;
         c.max_correction_distance = f64::INFINITY;
+        c.max_speed_m_s = f64::INFINITY;
         c.motion.max_intensity_sigma = f64::INFINITY;
         c.motion.max_depth_sigma_m = f64::INFINITY;
         c
@@ -492,6 +500,12 @@ impl Config {
                 "motion.max_translation_m/max_rotation_deg",
                 "must be positive".into(),
             );
+        }
+        if !(self.max_speed_m_s > 0.0) {
+            return Err(Error::InvalidConfig {
+                field: "max_speed_m_s",
+                why: format!("{} is not positive", self.max_speed_m_s),
+            });
         }
         if !(self.max_correction_distance > 0.0) {
             return bad(

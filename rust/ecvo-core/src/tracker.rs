@@ -12,7 +12,7 @@ use std::ops::Deref;
 use std::sync::Arc;
 
 use crate::Pose;
-use crate::camera::FrameView;
+use crate::camera::{Camera, FrameView};
 use crate::config::{Config, MotionPrior, ReferenceLevel};
 use crate::error::Result;
 use crate::motion::{MotionEstimator, MotionResult};
@@ -94,6 +94,18 @@ pub struct Counters {
     pub predicted_starts: u64,
     /// Times the tracker started afresh after a run of lost frames.
     pub reanchors: u64,
+    /// Registrations ([A] or a recovery) not believed because they implied a camera
+    /// faster than [`Config::max_speed_m_s`].
+    pub implausible_motions: u64,
+}
+
+/// Slack on the speed check, metres: registration noise on a short interval.
+const SPEED_SLACK_M: f64 = 0.02;
+
+/// Whether a camera that moved by `motion` in `dt` seconds stays under `max_speed`
+/// (m/s). Without a usable interval (timestamps not increasing) nothing is refused.
+fn plausible_speed(motion: &Pose, dt: f64, max_speed: f64) -> bool {
+    !(dt > 0.0) || motion.translation.vector.norm() <= max_speed * dt + SPEED_SLACK_M
 }
 
 /// After this many refused (failed or rejected) corrections in a row against the
@@ -287,7 +299,15 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         self.counters.motion_estimations += 1;
         out.frame_to_frame = Some(f2f);
         let predicted = prior.map_or(Pose::identity(), |p| se3::compose(&prev.pose, &p));
-        let mut pose = if f2f.is_ok() {
+        let dt = frame.timestamp - prev.frame.timestamp;
+        let believed = f2f.is_ok() && {
+            let ok = plausible_speed(&f2f.pose, dt, self.config.max_speed_m_s);
+            if !ok {
+                self.counters.implausible_motions += 1;
+            }
+            ok
+        };
+        let mut pose = if believed {
             if f2f.start > 0 {
                 self.counters.predicted_starts += 1;
             }
@@ -302,7 +322,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             se3::compose(&prev.pose, &f2f.pose)
         } else {
             self.velocity = None;
-            match self.recover(&frame, &predicted, &mut out) {
+            match self.recover(&frame, &predicted, dt, &mut out) {
                 Some(p) => p,
                 None => return self.lose(frame, index, out),
             }
@@ -365,9 +385,17 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
     }
 
     /// [A] failed: registers the frame against the kept references (level 1 first,
-    /// each frame once), seeded with the predicted pose. Returns the pose found.
-    fn recover(&mut self, frame: &F, predicted: &Pose, out: &mut FrameOutput) -> Option<Pose> {
+    /// each frame once), seeded with the predicted pose. Returns the pose found, if
+    /// it is a believable move from the previous frame, `dt` seconds before.
+    fn recover(
+        &mut self,
+        frame: &F,
+        predicted: &Pose,
+        dt: f64,
+        out: &mut FrameOutput,
+    ) -> Option<Pose> {
         let prev_index = self.prev.as_ref().map(|p| p.index);
+        let prev_pose = self.prev.as_ref().map_or(Pose::identity(), |p| p.pose);
         let mut tried: Option<u64> = prev_index;
         for k in 0..self.refs.len() {
             let Some(reference) = &self.refs[k] else {
@@ -384,9 +412,15 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             out.motion_estimations += 1;
             self.counters.motion_estimations += 1;
             if r.is_ok() {
+                let pose = se3::compose(&reference.pose, &r.pose);
+                let moved = se3::compose(&prev_pose.inverse(), &pose);
+                if !plausible_speed(&moved, dt, self.config.max_speed_m_s) {
+                    self.counters.implausible_motions += 1;
+                    continue;
+                }
                 self.counters.recovered_frames += 1;
                 out.recovered = true;
-                return Some(se3::compose(&reference.pose, &r.pose));
+                return Some(pose);
             }
         }
         None
@@ -491,6 +525,12 @@ impl Odometry {
         }
         self.pool.push(frame.clone());
         Ok(self.tracker.track(frame))
+    }
+
+    /// Prepares the frames from the next one on with new intrinsics of the same image
+    /// size ([`Preparer::set_intrinsics`]); tracking goes on across the change.
+    pub fn set_intrinsics(&mut self, camera: Camera) -> Result<()> {
+        self.preparer.set_intrinsics(camera)
     }
 
     /// The tracker, for its counters, state and reference frames.

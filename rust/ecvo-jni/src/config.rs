@@ -6,7 +6,7 @@ use jni::sys::jint;
 
 use crate::depth16::Confidence;
 use crate::error::{Failure, bad};
-use crate::layout::DepthFormat;
+use crate::layout::{DepthFormat, TRAJECTORY_WINDOW};
 
 /// The settings of `nativeInit`, checked; the error names the bad field.
 #[derive(Clone, Debug)]
@@ -127,6 +127,7 @@ impl InitArgs {
             },
             geometry: self.point_cloud.then(GeometryOptions::default),
             keep_trajectory: true,
+            trajectory_window: Some(TRAJECTORY_WINDOW),
             ..PipelineOptions::default()
         };
         Ok((config, options, format, min_confidence))

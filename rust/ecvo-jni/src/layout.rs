@@ -11,11 +11,16 @@ pub const NO_POSE: jlong = jlong::MIN;
 /// Doubles per pose in `nativeTrajectory` (`TimedPose.STRIDE`).
 pub const POSE_STRIDE: usize = 8;
 
+/// Poses a session keeps (`Tracker.TRAJECTORY_WINDOW`): about 18 minutes at 30 Hz, 2.9
+/// MB. Older poses are discarded, so that a session of any length holds a constant
+/// amount of memory; a UI reading `trajectorySince` at every poll keeps its own copy.
+pub const TRAJECTORY_WINDOW: usize = 32_768;
+
 /// Doubles per reference in `nativeReferences` (`ReferenceFrame.STRIDE`).
 pub const REFERENCE_STRIDE: usize = 9;
 
 /// Doubles in `nativeStats` (`TrackerStats.SIZE`).
-pub const STATS_SIZE: usize = 14;
+pub const STATS_SIZE: usize = 15;
 
 /// With the `test-hooks` feature only: a push with this timestamp panics inside the
 /// native call (the misuse suite checks it becomes a `RuntimeException`).
@@ -74,7 +79,7 @@ pub fn poses_doubles(records: &[PoseRecord]) -> Vec<f64> {
     records.iter().flat_map(pose_doubles).collect()
 }
 
-/// The 14 doubles of `nativeStats` (layout in `TrackerStats.kt`).
+/// The 15 doubles of `nativeStats` (layout in `TrackerStats.kt`).
 pub fn stats_doubles(s: &PipelineStats) -> [f64; STATS_SIZE] {
     let c = &s.counters;
     let level = |i: usize| c.references.get(i).copied().unwrap_or(0) as f64;
@@ -93,6 +98,7 @@ pub fn stats_doubles(s: &PipelineStats) -> [f64; STATS_SIZE] {
         s.geometry.mean_ms,
         s.latency.mean_ms,
         s.wall_ms_per_frame,
+        s.poses_discarded as f64,
     ]
 }
 

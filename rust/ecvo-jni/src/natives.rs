@@ -9,10 +9,10 @@ use jni::{Env, NativeMethod};
 use crate::config::InitArgs;
 use crate::error::{Failure, bad, run};
 use crate::frames::{PlaneLayout, array_len, copy_plane, direct};
-use crate::layout::poses_doubles;
 use crate::layout::{
     NO_POSE, REFERENCE_STRIDE, cloud_floats, pose_doubles, pose_matrix, stats_doubles,
 };
+use crate::layout::{TRAJECTORY_WINDOW, poses_doubles};
 use crate::tracker::{REGISTRY, init, lock, tracker};
 
 /// Declares the native methods once: each entry becomes a `native_method!` constant
@@ -61,6 +61,8 @@ bridge! {
         fn native_state(handle: jlong) -> jint;
     NATIVE_FLUSH = "Java_io_ecvo_NativeBridge_nativeFlush",
         fn native_flush(handle: jlong);
+    NATIVE_SET_INTRINSICS = "Java_io_ecvo_NativeBridge_nativeSetIntrinsics",
+        fn native_set_intrinsics(handle: jlong, fx: jdouble, fy: jdouble, cx: jdouble, cy: jdouble);
     NATIVE_TRAJECTORY = "Java_io_ecvo_NativeBridge_nativeTrajectory",
         fn native_trajectory(handle: jlong) -> [jdouble];
     NATIVE_TRAJECTORY_SINCE = "Java_io_ecvo_NativeBridge_nativeTrajectorySince",
@@ -273,6 +275,28 @@ fn native_flush<'local>(
     run(env, |_| Ok(tracker(handle)?.pipeline.flush()?))
 }
 
+fn native_set_intrinsics<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    handle: jlong,
+    fx: jdouble,
+    fy: jdouble,
+    cx: jdouble,
+    cy: jdouble,
+) -> jni::errors::Result<()> {
+    run(env, |_| {
+        let t = tracker(handle)?;
+        let camera = ecvo_core::Camera {
+            fx,
+            fy,
+            cx,
+            cy,
+            ..t.pipeline.intrinsics()
+        };
+        Ok(t.pipeline.set_intrinsics(camera)?)
+    })
+}
+
 fn doubles<'local>(env: &mut Env<'local>, v: &[f64]) -> Result<JDoubleArray<'local>, Failure> {
     let a = env.new_double_array(v.len())?;
     a.set_region(env, 0, v)?;
@@ -304,8 +328,19 @@ fn native_trajectory_since<'local>(
 ) -> jni::errors::Result<JDoubleArray<'local>> {
     run(env, |env| {
         let t = tracker(handle)?;
-        let from = usize::try_from(from).map_err(|_| bad(format!("from: {from} is negative")))?;
-        doubles(env, &poses_doubles(&t.pipeline.trajectory_since(from)))
+        let from = u64::try_from(from).map_err(|_| bad(format!("from: {from} is negative")))?;
+        let poses = t.pipeline.trajectory_since(from);
+        // With the window full, poses before its start are gone: say so rather than
+        // return poses that do not start at `from`.
+        if let Some(first) = poses.first()
+            && first.index > from
+        {
+            return Err(bad(format!(
+                "from: poses before index {} were discarded (a session keeps the last {TRAJECTORY_WINDOW}); ask from {} on",
+                first.index, first.index
+            )));
+        }
+        doubles(env, &poses_doubles(&poses))
     })
 }
 

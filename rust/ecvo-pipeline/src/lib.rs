@@ -34,7 +34,8 @@
 //!   last holder drops it, so a reference frame lives exactly as long as it is one.
 //!   Once warm, `push`, the queues and the filter, tracker and geometry stages
 //!   allocate nothing per frame (`tests/alloc.rs`). The exceptions: the optional
-//!   collections ([`PipelineOptions::keep_trajectory`],
+//!   collections ([`PipelineOptions::keep_trajectory`], constant once its
+//!   [`PipelineOptions::trajectory_window`] is full,
 //!   [`PipelineOptions::output_queue`]), and rayon's own injector queue, which
 //!   allocates (and later frees) one 1.5 kB block per 63 jobs handed to the pool from
 //!   the stage threads, about one every 25 frames.
@@ -72,6 +73,7 @@
 mod chain;
 mod geometry;
 mod pool;
+mod poselog;
 mod queue;
 mod shared;
 mod stages;
@@ -98,6 +100,7 @@ pub use types::*;
 use chain::{Chain, Published};
 use geometry::{Cloud, stage_points};
 use pool::{Ahead, FrameMeta, FramePool};
+use poselog::PoseLog;
 use queue::{Queue, lock};
 use shared::*;
 use stages::{filter_stage, geometry_stage, tracker_stage};
@@ -128,6 +131,12 @@ fn validate(opts: &PipelineOptions) -> Result<()> {
     let bad = |field: &'static str, why: String| Err(Error::InvalidOptions { field, why });
     if !(1..=256).contains(&opts.threads) {
         return bad("threads", format!("{} is not in 1..=256", opts.threads));
+    }
+    if opts.trajectory_window == Some(0) {
+        return bad(
+            "trajectory_window",
+            "0 keeps no pose; use None to keep them all".into(),
+        );
     }
     if !(1..=1024).contains(&opts.queue_capacity) {
         return bad(
@@ -207,19 +216,13 @@ impl Pipeline {
             input_closed: AtomicBool::new(false),
             failure: Mutex::new(None),
             next_sequence: AtomicU64::new(0),
-            last_input: Mutex::new(LastInput::default()),
-            // Raw buffers are created now too, for the same reason as the frame pool.
-            raw: Mutex::new(RawPool {
-                free: (0..q + 3)
-                    .map(|_| RawFrame {
-                        sequence: 0,
-                        timestamp: 0.0,
-                        pushed_at: Instant::now(),
-                        intensity: vec![0; config.camera.pixels()],
-                        depth: vec![0; config.camera.pixels()],
-                    })
-                    .collect(),
+            last_input: Mutex::new(LastInput {
+                camera: config.camera,
+                timestamp: None,
+                hash: None,
             }),
+            // Raw buffers are created now too, for the same reason as the frame pool.
+            raw: Mutex::new(RawPool::new(q + 3, config.camera)),
             raw_freed: Condvar::new(),
             input: Queue::new(q),
             prepared: Queue::new(q),
@@ -241,8 +244,7 @@ impl Pipeline {
                 tracked_at: Instant::now(),
             }),
             counters: Mutex::new(tracker.counters().clone()),
-            trajectory: Mutex::new(Vec::new()),
-            references: Mutex::new(Vec::new()),
+            poses: Mutex::new(PoseLog::new(options.trajectory_window)),
             cloud: options.geometry.map(|g| Mutex::new(Cloud::new(g))),
             timers: Timers::default(),
         });
@@ -348,7 +350,7 @@ impl Pipeline {
             return Err(s.stopped_error());
         }
         s.check_timestamp(&lock(&s.last_input), timestamp)?;
-        let (raw, mut dropped) = s.take_raw()?;
+        let raw = s.take_raw()?;
         let mut guard = RawGuard {
             shared: s,
             raw: Some(raw),
@@ -375,6 +377,9 @@ impl Pipeline {
                 s.update_progress(|p| p.repeated_frames += 1);
                 return Ok(PushStatus::Repeated);
             }
+            if let Some(r) = guard.raw.as_mut() {
+                r.camera = last.camera;
+            }
         }
         let mut raw = guard.raw.take().expect("the guard holds the frame");
         raw.timestamp = timestamp;
@@ -390,23 +395,56 @@ impl Pipeline {
             Admission::Live => s.input.push_evicting(raw),
         };
         match queued {
-            Ok(None) => {}
+            Ok(None) => Ok(PushStatus::Accepted),
             Ok(Some(old)) => {
                 s.give_raw(old);
                 s.update_progress(|p| p.dropped_at_input += 1);
-                dropped = true;
+                Ok(PushStatus::DroppedOldest)
             }
             Err(raw) => {
                 s.give_raw(raw);
                 s.update_progress(|p| p.pushed -= 1);
-                return Err(s.stopped_error());
+                Err(s.stopped_error())
             }
         }
-        Ok(if dropped {
-            PushStatus::DroppedOldest
-        } else {
-            PushStatus::Accepted
-        })
+    }
+
+    /// New intrinsics of the same image size for the frames pushed from now on: a
+    /// zoom, a refocus, or a calibration the camera reports per frame (Android's
+    /// `LENS_INTRINSIC_CALIBRATION`). Tracking goes on across the change: each frame
+    /// is prepared with the intrinsics in force when it was pushed, and MOTION
+    /// projects with each frame's own ([`ecvo_core::Preparer::set_intrinsics`]).
+    /// Counted in [`PipelineStats::intrinsics_changes`] when they differ from the
+    /// current ones. Fails, changing nothing, on invalid intrinsics or another image
+    /// size (which needs a new pipeline).
+    ///
+    /// The pipeline cannot see a zoom it is not told about: frames of a zoomed lens
+    /// read as a camera moving along its axis.
+    pub fn set_intrinsics(&self, camera: Camera) -> Result<()> {
+        camera.validate()?;
+        let s = &*self.shared;
+        if (camera.width, camera.height) != (s.camera.width, s.camera.height) {
+            return Err(ecvo_core::Error::InvalidConfig {
+                field: "width/height",
+                why: format!(
+                    "{}x{} differs from the stream's {}x{}; a new image size needs a new pipeline",
+                    camera.width, camera.height, s.camera.width, s.camera.height
+                ),
+            }
+            .into());
+        }
+        let mut last = lock(&s.last_input);
+        if last.camera != camera {
+            last.camera = camera;
+            drop(last);
+            s.update_progress(|p| p.intrinsics_changes += 1);
+        }
+        Ok(())
+    }
+
+    /// The intrinsics frames pushed now are prepared with.
+    pub fn intrinsics(&self) -> Camera {
+        lock(&self.shared.last_input).camera
     }
 
     /// Queues a copy of `view` (checked against the camera); see [`Pipeline::push`].
@@ -465,25 +503,31 @@ impl Pipeline {
         *lock(&self.shared.latest)
     }
 
-    /// Every tracked frame's pose so far (empty unless `keep_trajectory`).
+    /// Every tracked frame's pose so far (empty unless `keep_trajectory`; with a
+    /// [`PipelineOptions::trajectory_window`], the latest ones).
     pub fn trajectory(&self) -> Vec<PoseRecord> {
-        lock(&self.shared.trajectory).clone()
+        lock(&self.shared.poses).poses_since(0)
     }
 
     /// The poses of the tracked frames from index `from` on (empty when `from` is at or
     /// past the end, or without `keep_trajectory`). Copies only those, under the same
     /// short lock: a reader polling for new poses pays for what is new, not for the
-    /// whole session.
-    pub fn trajectory_since(&self, from: usize) -> Vec<PoseRecord> {
-        lock(&self.shared.trajectory)
-            .get(from..)
-            .map_or_else(Vec::new, <[PoseRecord]>::to_vec)
+    /// whole session. With a window, poses before [`Pipeline::trajectory_start`] are
+    /// gone and the result starts there: each record carries its `index`.
+    pub fn trajectory_since(&self, from: u64) -> Vec<PoseRecord> {
+        lock(&self.shared.poses).poses_since(from)
+    }
+
+    /// The index of the first pose still kept: 0 unless a
+    /// [`PipelineOptions::trajectory_window`] has overflowed.
+    pub fn trajectory_start(&self) -> u64 {
+        lock(&self.shared.poses).start()
     }
 
     /// Every reference frame's pose so far, in order, the first frame included
-    /// (empty unless `keep_trajectory`).
+    /// (empty unless `keep_trajectory`; with a window, those among the kept poses).
     pub fn references(&self) -> Vec<PoseRecord> {
-        lock(&self.shared.references).clone()
+        lock(&self.shared.poses).references()
     }
 
     /// A consistent copy of the cloud (empty without geometry). The geometry thread
@@ -535,6 +579,7 @@ impl Pipeline {
                     p.ahead_used,
                     p.timestamps_rejected,
                     p.repeated_frames,
+                    p.intrinsics_changes,
                 ],
                 wall,
             )
@@ -551,6 +596,7 @@ impl Pipeline {
             ahead_used,
             timestamps_rejected,
             repeated_frames,
+            intrinsics_changes,
         ] = progress;
         PipelineStats {
             filter: lock(&s.timers.filter).summary(),
@@ -570,6 +616,8 @@ impl Pipeline {
             ahead_used,
             timestamps_rejected,
             repeated_frames,
+            intrinsics_changes,
+            poses_discarded: lock(&s.poses).start(),
             input_queue: s.input.stats(),
             tracker_queue: s.prepared.stats(),
             geometry_queue: s.to_geometry.stats(),
@@ -589,10 +637,12 @@ impl Pipeline {
         self.join();
         self.shared.check_failure()?;
         let s = &*self.shared;
+        let stats = self.stats();
+        let (trajectory, references) = lock(&s.poses).take();
         Ok(PipelineSummary {
-            stats: self.stats(),
-            trajectory: std::mem::take(&mut *lock(&s.trajectory)),
-            references: std::mem::take(&mut *lock(&s.references)),
+            stats,
+            trajectory,
+            references,
             cloud: s
                 .cloud
                 .as_ref()

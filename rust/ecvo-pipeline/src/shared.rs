@@ -10,10 +10,43 @@ pub(crate) struct RawFrame {
     pub(crate) pushed_at: Instant,
     pub(crate) intensity: Vec<u8>,
     pub(crate) depth: Vec<u16>,
+    /// The intrinsics in force when it was pushed ([`crate::Pipeline::set_intrinsics`]).
+    pub(crate) camera: Camera,
 }
 
 pub(crate) struct RawPool {
     pub(crate) free: Vec<RawFrame>,
+    /// Buffers allocated beyond the pool's size in live mode (more threads pushing at
+    /// once than it has room for); freed as they come back.
+    pub(crate) extra: usize,
+    /// How many such buffers were ever allocated.
+    pub(crate) allocated: u64,
+    /// The stream's camera, to allocate one.
+    pub(crate) camera: Camera,
+}
+
+impl RawPool {
+    pub(crate) fn new(count: usize, camera: Camera) -> RawPool {
+        RawPool {
+            free: (0..count).map(|_| RawFrame::new(camera)).collect(),
+            extra: 0,
+            allocated: 0,
+            camera,
+        }
+    }
+}
+
+impl RawFrame {
+    fn new(camera: Camera) -> RawFrame {
+        RawFrame {
+            sequence: 0,
+            timestamp: 0.0,
+            pushed_at: Instant::now(),
+            intensity: vec![0; camera.pixels()],
+            depth: vec![0; camera.pixels()],
+            camera,
+        }
+    }
 }
 
 /// A reference frame on its way to the geometry stage.
@@ -37,6 +70,7 @@ pub(crate) struct Progress {
     pub(crate) ahead_used: u64,
     pub(crate) timestamps_rejected: u64,
     pub(crate) repeated_frames: u64,
+    pub(crate) intrinsics_changes: u64,
     pub(crate) first_push: Option<Instant>,
     pub(crate) last_tracked: Option<Instant>,
 }
@@ -88,15 +122,16 @@ pub(crate) struct Shared {
     /// restarts its [A]-ahead chain from it.
     pub(crate) velocity: Mutex<Published>,
     pub(crate) counters: Mutex<Counters>,
-    pub(crate) trajectory: Mutex<Vec<PoseRecord>>,
-    pub(crate) references: Mutex<Vec<PoseRecord>>,
+    /// The kept poses and reference records (`keep_trajectory`).
+    pub(crate) poses: Mutex<PoseLog>,
     pub(crate) cloud: Option<Mutex<Cloud>>,
     pub(crate) timers: Timers,
 }
 
 /// What `push` remembers of the last frame it accepted (queued or repeated).
-#[derive(Default)]
 pub(crate) struct LastInput {
+    /// The intrinsics frames pushed from now on carry.
+    pub(crate) camera: Camera,
     pub(crate) timestamp: Option<f64>,
     pub(crate) hash: Option<u64>,
 }
@@ -200,25 +235,24 @@ impl Shared {
         self.abort();
     }
 
-    /// A free raw frame; in live mode, when none is free, the oldest queued one is
-    /// taken back (and counted as dropped). Returns whether one was dropped.
-    pub(crate) fn take_raw(&self) -> Result<(RawFrame, bool)> {
+    /// A free raw frame. Offline, waits for one. Live, never waits: when none is free
+    /// (only with more threads pushing at once than the pool has room for: one
+    /// pusher needs at most `queue + 2` of its `queue + 3`), it allocates one, freed
+    /// when it comes back. A frame is dropped only once the new one is known to be
+    /// queued (not repeated), so every drop is reported to the pusher that caused it.
+    pub(crate) fn take_raw(&self) -> Result<RawFrame> {
         let mut g = lock(&self.raw);
         loop {
             if self.aborted() || self.input_closed.load(Ordering::Acquire) {
                 return Err(self.stopped_error());
             }
             if let Some(r) = g.free.pop() {
-                return Ok((r, false));
+                return Ok(r);
             }
             if self.admission == Admission::Live {
-                drop(g);
-                if let Some(old) = self.input.try_pop() {
-                    self.update_progress(|p| p.dropped_at_input += 1);
-                    return Ok((old, true));
-                }
-                g = lock(&self.raw);
-                continue;
+                g.extra += 1;
+                g.allocated += 1;
+                return Ok(RawFrame::new(g.camera));
             }
             g = self
                 .raw_freed
@@ -229,7 +263,15 @@ impl Shared {
     }
 
     pub(crate) fn give_raw(&self, raw: RawFrame) {
-        lock(&self.raw).free.push(raw);
+        let mut g = lock(&self.raw);
+        if g.extra > 0 {
+            g.extra -= 1;
+            drop(g);
+            drop(raw);
+            return;
+        }
+        g.free.push(raw);
+        drop(g);
         self.raw_freed.notify_one();
     }
 

@@ -51,7 +51,13 @@ pub(crate) fn filter_stage(
         // Timed inside the pool: a stage's time is its work, not its wait for a thread.
         let (result, ahead, filtered_in) = compute.install(|| {
             let t0 = Instant::now();
-            let r = preparer.prepare_into(view, prepared);
+            // New intrinsics (`Pipeline::set_intrinsics`), checked when they were set.
+            let r = if *preparer.camera() == raw.camera {
+                Ok(())
+            } else {
+                preparer.set_intrinsics(raw.camera)
+            }
+            .and_then(|()| preparer.prepare_into(view, prepared));
             // The tracker is behind when its queue is full: this frame would wait.
             let behind = s.prepared.len() >= s.prepared.capacity();
             let ahead = match (&r, &last) {
@@ -206,10 +212,7 @@ pub(crate) fn tracker_stage(
                 state: out.state,
                 reference_levels,
             };
-            lock(&s.trajectory).push(record);
-            if is_reference {
-                lock(&s.references).push(record);
-            }
+            lock(&s.poses).push(record, is_reference);
         }
         if let Some(tx) = &outputs {
             let mut msg = TrackedFrame {

@@ -170,6 +170,11 @@ pub struct PipelineStats {
     /// Frames bit-identical to the previous one, not queued
     /// ([`crate::PushStatus::Repeated`]); not in `pushed`.
     pub repeated_frames: u64,
+    /// Poses no longer kept because the [`crate::PipelineOptions::trajectory_window`]
+    /// was full: the index of the first kept pose.
+    pub poses_discarded: u64,
+    /// Calls of [`crate::Pipeline::set_intrinsics`] that changed the intrinsics.
+    pub intrinsics_changes: u64,
     /// Input queue (raw frames waiting for the filter).
     pub input_queue: QueueStats,
     /// Tracker queue (prepared frames waiting for the tracker).
@@ -198,6 +203,7 @@ pub(crate) fn copy_counters(dst: &mut Counters, src: &Counters) {
         recovered_frames,
         predicted_starts,
         reanchors,
+        implausible_motions,
     } = src;
     dst.frames = *frames;
     dst.motion_estimations = *motion_estimations;
@@ -209,6 +215,7 @@ pub(crate) fn copy_counters(dst: &mut Counters, src: &Counters) {
     dst.recovered_frames = *recovered_frames;
     dst.predicted_starts = *predicted_starts;
     dst.reanchors = *reanchors;
+    dst.implausible_motions = *implausible_motions;
 }
 
 #[cfg(test)]

@@ -350,7 +350,7 @@ fn non_increasing_timestamps_are_refused_and_counted_and_the_pipeline_goes_on() 
         assert!(all.len() >= 2, "{}", all.len());
         for from in 0..=all.len() + 2 {
             let want = all.get(from..).unwrap_or(&[]);
-            assert_eq!(p.trajectory_since(from), want, "from {from}");
+            assert_eq!(p.trajectory_since(from as u64), want, "from {from}");
         }
         p.finish().unwrap();
     }
@@ -435,4 +435,159 @@ fn frames_without_depth_are_never_repeated() {
     }
     let st = p.finish().unwrap().stats;
     assert_eq!((st.tracked, st.repeated_frames), (4, 0));
+}
+
+#[test]
+fn a_trajectory_window_keeps_the_latest_poses_and_the_same_poses() {
+    let (config, frames) = stream(14);
+    let run = |window: Option<usize>| {
+        let p = Pipeline::new(
+            config.clone(),
+            PipelineOptions {
+                keep_trajectory: true,
+                trajectory_window: window,
+                ..PipelineOptions::default()
+            },
+        )
+        .unwrap();
+        for f in &frames {
+            push(&p, f).unwrap();
+        }
+        p.flush().unwrap();
+        let live = (
+            p.trajectory(),
+            p.references(),
+            p.trajectory_start(),
+            p.trajectory_since(0),
+            p.trajectory_since(12),
+        );
+        (live, p.finish().unwrap())
+    };
+    let (_, all) = run(None);
+    let ((kept, refs, start, since0, since12), summary) = run(Some(5));
+    assert_eq!(all.trajectory.len(), 14);
+    assert_eq!(start, 9);
+    assert_eq!(summary.stats.poses_discarded, 9);
+    assert_eq!(all.stats.poses_discarded, 0);
+    // The window is the tail of the whole trajectory, bit for bit.
+    assert_eq!(kept, all.trajectory[9..]);
+    assert_eq!(summary.trajectory, kept);
+    // Asked from before the window, the read starts at the window (see `index`).
+    assert_eq!(since0, kept);
+    assert_eq!(since12, all.trajectory[12..]);
+    // The references kept are those among the kept poses.
+    let want: Vec<PoseRecord> = all
+        .references
+        .iter()
+        .filter(|r| r.index >= 9)
+        .copied()
+        .collect();
+    assert_eq!(refs, want);
+    assert_eq!(summary.references, want);
+}
+
+#[test]
+fn an_empty_trajectory_window_is_refused() {
+    let (config, _) = stream(1);
+    let r = Pipeline::new(
+        config,
+        PipelineOptions {
+            keep_trajectory: true,
+            trajectory_window: Some(0),
+            ..PipelineOptions::default()
+        },
+    );
+    assert!(
+        matches!(
+            &r,
+            Err(Error::InvalidOptions {
+                field: "trajectory_window",
+                ..
+            })
+        ),
+        "{:?}",
+        r.as_ref().err()
+    );
+}
+
+#[test]
+fn live_pushes_from_many_threads_report_every_drop_and_return_the_extra_buffers() {
+    let (config, frames) = stream(4);
+    let frames = Arc::new(frames);
+    let p = Arc::new(
+        Pipeline::new(
+            config,
+            PipelineOptions {
+                admission: Admission::Live,
+                queue_capacity: 1,
+                test_hooks: TestHooks {
+                    panic_at: None,
+                    delay: Some((Stage::Filter, Duration::from_millis(3))),
+                },
+                ..PipelineOptions::default()
+            },
+        )
+        .unwrap(),
+    );
+    // Six threads push at once, more than the pool's 4 raw buffers can serve, with
+    // frames that often repeat the last one pushed by another thread.
+    let clock = Arc::new(Mutex::new(0.0f64));
+    let counts = within_a_minute({
+        let (p, frames, clock) = (Arc::clone(&p), Arc::clone(&frames), Arc::clone(&clock));
+        move || {
+            let workers: Vec<_> = (0..6)
+                .map(|t| {
+                    let (p, frames, clock) =
+                        (Arc::clone(&p), Arc::clone(&frames), Arc::clone(&clock));
+                    std::thread::spawn(move || {
+                        let mut c = [0u64; 4];
+                        for k in 0..150 {
+                            let f = &frames[(t + k / 7) % 2];
+                            let ts = {
+                                let mut g = clock.lock().unwrap();
+                                *g += 0.01;
+                                *g
+                            };
+                            match p.push(ts, |i, d| {
+                                i.copy_from_slice(&f.intensity);
+                                d.copy_from_slice(&f.depth);
+                            }) {
+                                Ok(PushStatus::Accepted) => c[0] += 1,
+                                Ok(PushStatus::DroppedOldest) => c[1] += 1,
+                                Ok(PushStatus::Repeated) => c[2] += 1,
+                                Err(Error::TimestampNotIncreasing { .. }) => c[3] += 1,
+                                Err(e) => panic!("{e}"),
+                            }
+                        }
+                        c
+                    })
+                })
+                .collect();
+            workers.into_iter().fold([0u64; 4], |mut a, w| {
+                let c = w.join().unwrap();
+                for (a, c) in a.iter_mut().zip(c) {
+                    *a += c;
+                }
+                a
+            })
+        }
+    });
+    p.flush().unwrap();
+    let st = p.stats();
+    let [accepted, dropped, repeated, refused] = counts;
+    assert_eq!(accepted + dropped + repeated + refused, 900);
+    assert_eq!(st.pushed, accepted + dropped, "{st:?}");
+    // Every frame dropped at the input was reported to a pusher, and none is lost
+    // without a trace.
+    assert_eq!(st.dropped_at_input, dropped, "{st:?}");
+    assert_eq!(st.repeated_frames, repeated);
+    assert_eq!(st.timestamps_rejected, refused);
+    assert_eq!(st.tracked + st.dropped, st.pushed);
+    assert!(dropped > 0 && repeated > 0, "{counts:?}");
+    // The buffers allocated for the extra pushers were freed: the pool is back to
+    // its size.
+    let raw = lock(&p.shared.raw);
+    assert_eq!((raw.extra, raw.free.len()), (0, 4));
+    // The run did need them (else it tests nothing new).
+    assert!(raw.allocated > 0);
 }

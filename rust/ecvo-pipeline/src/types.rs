@@ -93,8 +93,16 @@ pub struct PipelineOptions {
     pub geometry: Option<GeometryOptions>,
     /// Keep every frame's pose and every reference frame's pose for
     /// [`Pipeline::trajectory`], [`Pipeline::references`] and the summary. These
-    /// lists grow with the stream (about 100 bytes per frame).
+    /// lists grow with the stream (about 100 bytes per frame) unless
+    /// `trajectory_window` bounds them.
     pub keep_trajectory: bool,
+    /// With `keep_trajectory`: keep only the latest this many poses (and the reference
+    /// records among them), so that memory stays constant over a session of any
+    /// length; the older ones are discarded ([`Pipeline::trajectory_start`],
+    /// [`PipelineStats::poses_discarded`]). `None` keeps every pose. At least 1.
+    ///
+    /// [`Pipeline::trajectory_start`]: crate::Pipeline::trajectory_start
+    pub trajectory_window: Option<usize>,
     /// Send each frame's output to a bounded channel of this capacity
     /// ([`Pipeline::outputs`]); `None` sends nothing. Offline, the tracker waits while
     /// the channel is full, so consume it (or drop every receiver); live, an output
@@ -115,6 +123,7 @@ impl Default for PipelineOptions {
             queue_capacity: 2,
             geometry: None,
             keep_trajectory: false,
+            trajectory_window: None,
             output_queue: None,
             #[cfg(any(test, feature = "test-hooks"))]
             test_hooks: TestHooks::default(),
@@ -205,9 +214,11 @@ pub struct LatestPose {
 pub struct PipelineSummary {
     /// Final statistics.
     pub stats: PipelineStats,
-    /// Every tracked frame's pose (empty unless `keep_trajectory`).
+    /// Every tracked frame's pose (empty unless `keep_trajectory`; only the latest
+    /// ones with a `trajectory_window`).
     pub trajectory: Vec<PoseRecord>,
-    /// Every reference frame's pose, in order (empty unless `keep_trajectory`).
+    /// Every reference frame's pose, in order (empty unless `keep_trajectory`; only
+    /// those among the kept poses with a `trajectory_window`).
     pub references: Vec<PoseRecord>,
     /// The accumulated cloud (empty without geometry).
     pub cloud: Vec<CloudPoint>,

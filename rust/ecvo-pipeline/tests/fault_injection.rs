@@ -141,3 +141,40 @@ fn a_jump_is_flagged_at_once_and_a_zoom_is_at_most_one_wrong_frame() {
     assert!(r.recovered_after.is_some_and(|n| n <= max_lost), "{r:?}");
     assert!(r.wrong_after <= 1, "{r:?}");
 }
+
+#[test]
+fn an_announced_zoom_is_tracked_right_through_and_after_the_change() {
+    // The caller passes the zoomed intrinsics with the first zoomed frame and the old
+    // ones back with the first frame after: every frame tracks with the right motion
+    // (within WRONG_M / WRONG_DEG), nothing is lost, and the drift across the
+    // change stays small.
+    let r = both(Fault::IntrinsicsZoomAnnounced);
+    assert_eq!(
+        (r.lost, r.silently_wrong, r.wrong_after),
+        (0, 0, 0),
+        "{r:?}"
+    );
+    assert_eq!(r.tracked_ok, faults::LEN, "{r:?}");
+    assert_eq!(r.recovered_after, Some(1), "{r:?}");
+    assert!(r.drift_m < 0.02 && r.drift_deg < 1.0, "{r:?}");
+}
+
+#[test]
+fn intrinsics_of_another_size_or_invalid_are_refused_and_change_nothing() {
+    let config = faults::config();
+    let p = ecvo_pipeline::Pipeline::new(config.clone(), Default::default()).unwrap();
+    let mut smaller = config.camera;
+    smaller.width /= 2;
+    assert!(p.set_intrinsics(smaller).is_err());
+    let mut bad = config.camera;
+    bad.fx = f64::NAN;
+    assert!(p.set_intrinsics(bad).is_err());
+    assert_eq!(p.intrinsics(), config.camera);
+    assert_eq!(p.stats().intrinsics_changes, 0);
+    let mut zoomed = config.camera;
+    zoomed.fx *= 1.3;
+    p.set_intrinsics(zoomed).unwrap();
+    p.set_intrinsics(zoomed).unwrap();
+    assert_eq!(p.intrinsics(), zoomed);
+    assert_eq!(p.stats().intrinsics_changes, 1);
+}

@@ -262,6 +262,44 @@ impl Preparer {
         }
     }
 
+    /// The intrinsics frames are prepared with.
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// Prepares the next frames with new intrinsics of the same image size: a zoom,
+    /// a refocus, or a calibration the camera reports per frame. Each prepared frame
+    /// carries its own intrinsics at every level, and MOTION projects with the target
+    /// frame's, so a frame prepared before the change still registers with one
+    /// prepared after it. Fails (and changes nothing) on invalid intrinsics or
+    /// another image size.
+    pub fn set_intrinsics(&mut self, camera: Camera) -> Result<()> {
+        camera.validate()?;
+        if (camera.width, camera.height) != (self.camera.width, self.camera.height) {
+            return Err(crate::Error::InvalidConfig {
+                field: "width/height",
+                why: format!(
+                    "{}x{} differs from the stream's {}x{}; a new image size needs a new tracker",
+                    camera.width, camera.height, self.camera.width, self.camera.height
+                ),
+            });
+        }
+        let (ifx, ify, cx, cy) = (
+            1.0 / camera.fx as f32,
+            1.0 / camera.fy as f32,
+            camera.cx as f32,
+            camera.cy as f32,
+        );
+        for (x, r) in self.ray_x.iter_mut().enumerate() {
+            *r = (x as f32 - cx) * ifx;
+        }
+        for (y, r) in self.ray_y.iter_mut().enumerate() {
+            *r = (y as f32 - cy) * ify;
+        }
+        self.camera = camera;
+        Ok(())
+    }
+
     /// Prepares `view` into `out`, reusing `out`'s buffers. Fails only on a frame
     /// whose sizes do not match the camera.
     pub fn prepare_into(&mut self, view: FrameView<'_>, out: &mut PreparedFrame) -> Result<()> {

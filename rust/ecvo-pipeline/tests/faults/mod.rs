@@ -46,13 +46,16 @@ pub enum Fault {
     GarbageDepth,
     /// The lens zooms: focal lengths 30 % longer than the configured camera's.
     IntrinsicsZoom,
+    /// The same zoom, announced: the caller passes the new intrinsics
+    /// (`set_intrinsics`) with the first zoomed frame, and the old ones back after.
+    IntrinsicsZoomAnnounced,
     /// The frames come at another resolution (160x90) than the configured 320x180.
     IntrinsicsResolution,
 }
 
 impl Fault {
     /// Every fault, in table order.
-    pub const ALL: [Fault; 9] = [
+    pub const ALL: [Fault; 10] = [
         Fault::BlackIntensity,
         Fault::CoveredLens,
         Fault::FrozenFrame,
@@ -61,6 +64,7 @@ impl Fault {
         Fault::BackwardsTimestamps,
         Fault::GarbageDepth,
         Fault::IntrinsicsZoom,
+        Fault::IntrinsicsZoomAnnounced,
         Fault::IntrinsicsResolution,
     ];
 
@@ -74,7 +78,8 @@ impl Fault {
             Fault::DuplicatedTimestamps => "duplicated timestamps",
             Fault::BackwardsTimestamps => "backwards timestamps",
             Fault::GarbageDepth => "garbage depth and intensity",
-            Fault::IntrinsicsZoom => "intrinsics change: fx, fy x1.3",
+            Fault::IntrinsicsZoom => "intrinsics change: fx, fy x1.3, not told",
+            Fault::IntrinsicsZoomAnnounced => "intrinsics change: fx, fy x1.3, `set_intrinsics`",
             Fault::IntrinsicsResolution => "intrinsics change: 160x90 frames",
         }
     }
@@ -86,6 +91,8 @@ pub struct Input {
     pub intensity: Vec<u8>,
     pub depth: Vec<u16>,
     pub truth: Pose,
+    /// New intrinsics the caller passes before this frame (`set_intrinsics`).
+    pub announce: Option<Camera>,
 }
 
 /// What happened to one frame.
@@ -189,7 +196,11 @@ pub fn stream(fault: Fault) -> Vec<Input> {
         if fault == Fault::Jump30cm20deg && i >= START {
             truth *= jump;
         }
-        if fault == Fault::IntrinsicsZoom && faulty(i) {
+        let zoom = matches!(
+            fault,
+            Fault::IntrinsicsZoom | Fault::IntrinsicsZoomAnnounced
+        );
+        if zoom && faulty(i) {
             camera.fx *= 1.3;
             camera.fy *= 1.3;
         }
@@ -232,11 +243,15 @@ pub fn stream(fault: Fault) -> Vec<Input> {
                 _ => {}
             }
         }
+        let announce = (fault == Fault::IntrinsicsZoomAnnounced
+            && (i == START || i == START + LEN))
+            .then(|| camera_of(&camera));
         out.push(Input {
             timestamp,
             intensity,
             depth,
             truth,
+            announce,
         });
     }
     out
@@ -251,6 +266,9 @@ pub fn run(engine: Engine, inputs: &[Input]) -> Vec<Outcome> {
             inputs
                 .iter()
                 .map(|f| {
+                    if let Some(c) = f.announce {
+                        odo.set_intrinsics(c).expect("valid intrinsics");
+                    }
                     match odo.push(FrameView {
                         timestamp: f.timestamp,
                         intensity: &f.intensity,
@@ -276,6 +294,9 @@ pub fn run(engine: Engine, inputs: &[Input]) -> Vec<Outcome> {
             let pushed: Vec<Option<PushStatus>> = inputs
                 .iter()
                 .map(|f| {
+                    if let Some(c) = f.announce {
+                        p.set_intrinsics(c).expect("valid intrinsics");
+                    }
                     p.push_view(FrameView {
                         timestamp: f.timestamp,
                         intensity: &f.intensity,

@@ -24,7 +24,9 @@ public final class NativeBridge {
     public static native long nativeGetPose(long handle, float[] out);
     public static native int nativeState(long handle);
     public static native void nativeFlush(long handle);
+    public static native void nativeSetIntrinsics(long handle, double fx, double fy, double cx, double cy);
     public static native double[] nativeTrajectory(long handle);
+    public static native double[] nativeTrajectorySince(long handle, int from);
     public static native double[] nativeReferences(long handle);
     public static native double[] nativeStats(long handle);
     public static native float[] nativePointCloud(long handle, int maxPoints);

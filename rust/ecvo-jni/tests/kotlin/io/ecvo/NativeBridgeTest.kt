@@ -358,11 +358,24 @@ class NativeBridgeTest {
             assertThrows<IllegalStateException> { NativeBridge.nativeGetPose(bad, FloatArray(16)) }
             assertThrows<IllegalStateException> { NativeBridge.nativeState(bad) }
             assertThrows<IllegalStateException> { NativeBridge.nativeFlush(bad) }
+            assertThrows<IllegalStateException> { NativeBridge.nativeSetIntrinsics(bad, 250.0, 250.0, 159.5, 89.5) }
             assertThrows<IllegalStateException> { NativeBridge.nativeTrajectory(bad) }
             assertThrows<IllegalStateException> { NativeBridge.nativeReferences(bad) }
             assertThrows<IllegalStateException> { NativeBridge.nativeStats(bad) }
             assertThrows<IllegalStateException> { NativeBridge.nativePointCloud(bad, 1) }
         }
+    }
+
+    @Test fun intrinsicsChangeOrAreRefusedWithIllegalArgument(): Unit = Tracker(config()).use { t ->
+        t.setIntrinsics(325.0, 325.0, 159.5, 89.5) // a 1.3x zoom
+        t.setIntrinsics(250.0, 250.0, 160.0, 90.0)
+        assertThrows<IllegalArgumentException> { t.setIntrinsics(0.0, 250.0, 159.5, 89.5) }
+        assertThrows<IllegalArgumentException> { t.setIntrinsics(250.0, Double.NaN, 159.5, 89.5) }
+        assertThrows<IllegalArgumentException> { t.setIntrinsics(250.0, 250.0, Double.POSITIVE_INFINITY, 89.5) }
+        // Tracking goes on: frames pushed after the calls are accepted and tracked.
+        for (i in 1..3) t.pushFrame(i * 33_000_000L, ShortArray(pixels) { 1000 }, ByteArray(pixels) { ((it + i) % 251).toByte() })
+        t.flush()
+        assertEquals(3L, t.stats().framesTracked)
     }
 
     @Test fun freshTrackerReportsZeros(): Unit = Tracker(config()).use { t ->

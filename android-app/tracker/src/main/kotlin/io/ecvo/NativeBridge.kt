@@ -50,6 +50,9 @@ internal object NativeBridge {
     /** Blocks until every accepted frame has been tracked. */
     @JvmStatic external fun nativeFlush(handle: Long)
 
+    /** New intrinsics (pixels of the pushed frames) for the frames pushed from now on. */
+    @JvmStatic external fun nativeSetIntrinsics(handle: Long, fx: Double, fy: Double, cx: Double, cy: Double)
+
     /** The trajectory so far: 8 doubles per frame (t seconds, tx, ty, tz, qx, qy, qz, qw). */
     @JvmStatic external fun nativeTrajectory(handle: Long): DoubleArray
 

@@ -153,12 +153,29 @@ class Tracker(val config: TrackerConfig) : PoseTracker {
     /** Blocks until every accepted frame has been tracked. */
     override fun flush(): Unit = withHandle { h -> NativeBridge.nativeFlush(h) }
 
-    /** The estimated trajectory so far, one camera-to-world pose per tracked frame. */
+    /**
+     * New intrinsics, in pixels of the pushed frames, for the frames pushed from now on:
+     * a zoom, a refocus, or a calibration the camera reports per frame
+     * (`CaptureResult.LENS_INTRINSIC_CALIBRATION`). Tracking goes on across the change;
+     * a zoom the tracker is not told about reads as the camera moving along its axis.
+     * Throws IllegalArgumentException on values that are not finite or a zero focal
+     * length.
+     */
+    fun setIntrinsics(fx: Double, fy: Double, cx: Double, cy: Double): Unit =
+        withHandle { h -> NativeBridge.nativeSetIntrinsics(h, fx, fy, cx, cy) }
+
+    /**
+     * The estimated trajectory so far, one camera-to-world pose per tracked frame: the
+     * latest [TRAJECTORY_WINDOW] of them ([TrackerStats.trajectoryStart] is the index of
+     * the first).
+     */
     fun trajectory(): List<TimedPose> = withHandle { h -> TimedPose.listFromArray(NativeBridge.nativeTrajectory(h)) }
 
     /**
      * The poses from index [from] (0-based, in tracking order) on: a UI that has `n`
-     * poses asks for `trajectorySince(n)` and copies only what is new.
+     * poses asks for `trajectorySince(n)` and copies only what is new. The tracker keeps
+     * the latest [TRAJECTORY_WINDOW] poses; asking from before
+     * [TrackerStats.trajectoryStart] throws IllegalArgumentException.
      */
     override fun trajectorySince(from: Int): List<TimedPose> = withHandle { h ->
         require(from >= 0) { "from: $from is negative" }
@@ -190,6 +207,12 @@ class Tracker(val config: TrackerConfig) : PoseTracker {
     companion object {
         /** What [getPose] returns when there is no pose yet. */
         const val NO_POSE: Long = Long.MIN_VALUE
+
+        /**
+         * Poses the native tracker keeps (the latest ones; about 18 minutes at 30 Hz), so
+         * that its memory is constant over a session of any length.
+         */
+        const val TRAJECTORY_WINDOW: Int = 32_768
 
         private val LOG: Logger = Logger.getLogger("io.ecvo.Tracker")
         private val CLEANER: Cleaner = Cleaner.create()

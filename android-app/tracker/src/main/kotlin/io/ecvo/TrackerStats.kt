@@ -37,6 +37,12 @@ data class TrackerStats(
     val latencyMs: Double,
     /** Wall time from the first push to the last tracked frame divided by the frames tracked: the paper's "Total", ms. */
     val totalMs: Double,
+    /**
+     * Index of the first pose the tracker still keeps: 0 until a session passes
+     * [Tracker.TRAJECTORY_WINDOW] poses, then the number of poses discarded (ask
+     * [Tracker.trajectorySince] from here on).
+     */
+    val trajectoryStart: Long = 0,
 ) {
     companion object {
         /**
@@ -59,10 +65,11 @@ data class TrackerStats(
          * | 11 | [geometryMs] |
          * | 12 | [latencyMs] |
          * | 13 | [totalMs] |
+         * | 14 | [trajectoryStart] |
          *
          * Later versions may append fields; [fromArray] ignores what it does not know.
          */
-        const val SIZE: Int = 14
+        const val SIZE: Int = 15
 
         /** All zeros: what a fresh tracker reports. */
         val EMPTY: TrackerStats = fromArray(DoubleArray(SIZE))
@@ -88,6 +95,7 @@ data class TrackerStats(
                 geometryMs = a[11],
                 latencyMs = a[12],
                 totalMs = a[13],
+                trajectoryStart = a[14].toLong(),
             )
         }
     }
@@ -97,6 +105,6 @@ data class TrackerStats(
         framesPushed.toDouble(), framesDropped.toDouble(), framesTracked.toDouble(),
         motionEstimations.toDouble(), referencesL1.toDouble(), referencesL2.toDouble(),
         lostFrames.toDouble(), failedCorrections.toDouble(), reanchors.toDouble(),
-        filterMs, trackerMs, geometryMs, latencyMs, totalMs,
+        filterMs, trackerMs, geometryMs, latencyMs, totalMs, trajectoryStart.toDouble(),
     )
 }

@@ -144,6 +144,7 @@ class TrackerApiTest {
             "nativeGetPose" to listOf(J, FloatArray::class.java),
             "nativeState" to listOf(J),
             "nativeFlush" to listOf(J),
+            "nativeSetIntrinsics" to listOf(J, D, D, D, D),
             "nativeTrajectory" to listOf(J),
             "nativeTrajectorySince" to listOf(J, I),
             "nativeReferences" to listOf(J),

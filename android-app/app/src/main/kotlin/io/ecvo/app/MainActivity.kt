@@ -290,7 +290,9 @@ class MainActivity : Activity() {
                 exports.deleteRecursively()
                 val dir = File(exports, name)
                 val t = session.tracker
-                SessionExport.write(dir, t.trajectorySince(0), t.references(), if (withCloud) t.pointCloud(MAX_EXPORT_POINTS) else null)
+                // The tracker keeps the latest Tracker.TRAJECTORY_WINDOW poses: export those.
+                val poses = t.trajectorySince(t.stats().trajectoryStart.toInt())
+                SessionExport.write(dir, poses, t.references(), if (withCloud) t.pointCloud(MAX_EXPORT_POINTS) else null)
                 if (recording != null && recording.isDirectory) recording.copyRecursively(File(dir, "stream"))
                 val zip = File(exports, "$name.zip")
                 SessionExport.zip(dir, zip)

@@ -185,6 +185,9 @@ class SessionController(
             presenter.onTrackerUpdate(t.state, stats, ts, now)
             presenter.onRates(rate.fps, extraDroppedNoColour)
             presenter.onRecording(s.recording)
+            // Poses older than the tracker's window are gone (a UI that did not poll for
+            // that long); draw on from the window's start.
+            if (trajectory.nextIndex < stats.trajectoryStart) trajectory.skipTo(stats.trajectoryStart)
             trajectory.append(t.trajectorySince(trajectory.nextIndex))
             ts
         } catch (e: IllegalStateException) {

@@ -41,6 +41,15 @@ class TrajectoryBuffer(val maxPoints: Int = 4096) {
         stride *= 2
     }
 
+    /**
+     * Moves [nextIndex] forward to [index] (the tracker discarded the poses in between);
+     * the poses kept so far stay.
+     */
+    fun skipTo(index: Long) {
+        require(index >= nextIndex && index <= Int.MAX_VALUE) { "cannot skip from $nextIndex to $index" }
+        nextIndex = index.toInt()
+    }
+
     /** Forgets everything (a new session). */
     fun clear() {
         kept.clear()

@@ -17,7 +17,8 @@ import org.junit.Assert.assertTrue
 import org.junit.Test
 
 /** A tracker without native code: counts pushes, answers with [statuses], can be made to fail. */
-class FakeTracker(private val statuses: (Int) -> PushStatus = { PushStatus.ACCEPTED }) : PoseTracker {
+/** Keeps the latest [window] poses, as the native tracker keeps Tracker.TRAJECTORY_WINDOW. */
+class FakeTracker(private val window: Int = Int.MAX_VALUE, private val statuses: (Int) -> PushStatus = { PushStatus.ACCEPTED }) : PoseTracker {
     val pushed = ArrayList<Long>()
     var failWith: RuntimeException? = null
     @Volatile private var closed = false
@@ -29,9 +30,13 @@ class FakeTracker(private val statuses: (Int) -> PushStatus = { PushStatus.ACCEP
     }
     override fun getPose(out: FloatArray): Long { check(!closed); return if (pushed.isEmpty()) Tracker.NO_POSE else pushed.last() }
     override val state: TrackingState get() = if (pushed.isEmpty()) TrackingState.INITIALISING else TrackingState.TRACKING
-    override fun stats(): TrackerStats = TrackerStats.EMPTY.copy(framesPushed = pushed.size.toLong(), framesTracked = pushed.size.toLong())
+    private val start: Int get() = maxOf(0, pushed.size - window)
+    override fun stats(): TrackerStats = TrackerStats.EMPTY.copy(
+        framesPushed = pushed.size.toLong(), framesTracked = pushed.size.toLong(), trajectoryStart = start.toLong(),
+    )
     override fun trajectorySince(from: Int): List<TimedPose> {
         check(!closed)
+        require(from >= start) { "poses before index $start were discarded" }
         return pushed.drop(from).map { TimedPose(it / 1e9, it.toDouble(), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0) }
     }
     override fun references(): List<ReferenceFrame> = emptyList()
@@ -196,6 +201,23 @@ class SessionTest {
         assertTrue(fake.isClosed)
         assertFalse(c.resume(FrameSource.LIVE) { Source() })
         assertEquals(Tracker.NO_POSE, c.poll(FloatArray(16)))
+    }
+
+    @Test
+    fun aPollAfterTheTrackersWindowMovedOnReadsFromTheWindowsStart() {
+        val fake = FakeTracker(window = 8)
+        val c = controller(tracker = { fake })
+        lateinit var cb: SourceCallbacks
+        c.start(FrameSource.REPLAY, config) { cb = it; Source() }
+        for (i in 1..5) cb.frame(i * 10L, depth, gray)
+        c.poll(FloatArray(16))
+        assertEquals(5, c.trajectory.nextIndex)
+        // 20 more frames without a poll: the tracker keeps only the last 8 (17..24).
+        for (i in 6..25) cb.frame(i * 10L, depth, gray)
+        c.poll(FloatArray(16))
+        assertEquals(25, c.trajectory.nextIndex)
+        assertTrue(c.presenter.status.kind != StatusKind.ERROR)
+        assertEquals(listOf(10L, 20L, 30L, 40L, 50L) + (18..25).map { it * 10L }, c.trajectory.poses.map { Math.round(it.tx) })
     }
 
     @Test
