@@ -2,7 +2,7 @@
 # Builds libecvo_jni (release) and the Java drivers of rust/ecvo-jni/tests/drivers, then
 # runs one of them on a JVM with -Xcheck:jni, on testdata/synth_phone_320x180:
 #
-#   scripts/jni-drivers.sh soak   [FRAMES=100000] [RATE=300] [REPORT=5000] [WARMUP=40000]
+#   scripts/jni-drivers.sh soak   [FRAMES=100000] [RATE=300] [REPORT=5000] [WARMUP=auto: cloud and pose window full]
 #   scripts/jni-drivers.sh stress [SECONDS=120] [THREADS=8]
 #   scripts/jni-drivers.sh faults
 #

@@ -97,6 +97,11 @@ pub use pool::PooledFrame;
 pub use stats::{PipelineStats, PoolStats, QueueStats, StageStats};
 pub use types::*;
 
+/// The 64-bit content hash [`Pipeline::push`] uses to tell a repeated frame, public
+/// for its benchmark (`benches/push.rs`).
+#[doc(hidden)]
+pub use shared::frame_hash;
+
 use chain::{Chain, Published};
 use geometry::{Cloud, stage_points};
 use pool::{Ahead, FrameMeta, FramePool};

@@ -139,7 +139,7 @@ pub(crate) struct LastInput {
 /// A 64-bit hash of a frame's intensity and depth, to tell a frame bit-identical to
 /// the previous one (two different frames collide with probability about 2^-64). Four
 /// independent lanes of multiply-rotate over 8-byte words.
-pub(crate) fn frame_hash(intensity: &[u8], depth: &[u16]) -> u64 {
+pub fn frame_hash(intensity: &[u8], depth: &[u16]) -> u64 {
     const K: u64 = 0x9E37_79B9_7F4A_7C15;
     let mut lanes = [K, K ^ 1, K ^ 2, K ^ 3];
     let mut mix = |i: usize, w: u64| {
