@@ -1,8 +1,13 @@
-//! The Gauss-Newton system of one linearisation and the Jacobians that fill it.
+//! The Gauss-Newton system of one linearisation, and its accumulation over a chunk
+//! of residuals in [`LANES`]-wide blocks.
 
 use nalgebra::{Matrix6, Vector6};
 
-use super::warp::Residual;
+use super::lanes::{self, LANES, V};
+use super::robust::weigh;
+use super::warp::Chunk;
+use crate::prepare::simd::multiversion;
+use crate::scale::Whitener;
 
 /// The Gauss-Newton system `JᵀWJ δ = −JᵀWr` of one linearisation, with its error.
 /// `merge` adds two partial systems, which is what a parallel reduction needs.
@@ -54,111 +59,164 @@ impl NormalEquations {
     }
 }
 
-/// A Jacobian row `[v; ω]` padded to eight lanes (the last two are 0), so that the
-/// accumulation runs on whole SIMD vectors.
-pub(super) type JRow = [f32; 8];
+/// Points per run of single-precision sums (each lane adds `RUN / LANES` points)
+/// before they are flushed into double precision.
+const RUN: usize = 128;
 
-/// Accumulates weighted Jacobian rows in single precision over short runs and
-/// flushes them into double precision, keeping both speed and accuracy. Each row
-/// of `JᵀWJ` is updated whole (eight lanes, the lower triangle too, which is never
-/// read): every upper-triangle entry sees exactly the operations of a scalar loop.
-pub(super) struct Accumulator {
-    h: [JRow; 6],
-    g: JRow,
-    run: usize,
-    total: NormalEquations,
+/// Entries of the upper triangle of `JᵀWJ`.
+const H: usize = 21;
+
+/// The normal equations of a chunk (`count` residuals) at the scale `wh`; `f` is
+/// (fx, fy) of the level. `error` is left 0.
+pub(super) fn chunk(c: &Chunk, wh: &Whitener, f: [f32; 2]) -> NormalEquations {
+    let n = c.padded();
+    let mut ne = accumulate(
+        &c.ri[..n],
+        &c.rz[..n],
+        &c.sz[..n],
+        &c.gx[..n],
+        &c.gy[..n],
+        &c.dx[..n],
+        &c.dy[..n],
+        &c.x[..n],
+        &c.y[..n],
+        &c.z[..n],
+        wh,
+        &f,
+    );
+    ne.count = c.n;
+    ne
 }
 
-impl Accumulator {
-    const RUN: usize = 128;
+multiversion! {
+    /// `JᵀWJ` and `JᵀWr` of whitened residuals, summed by lane in f32 over runs of
+    /// [`RUN`] points and flushed into f64 in lane order.
+    fn accumulate(
+        ri: &[f32],
+        rz: &[f32],
+        sz: &[f32],
+        gx: &[f32],
+        gy: &[f32],
+        dx: &[f32],
+        dy: &[f32],
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        wh: &Whitener,
+        f: &[f32; 2],
+    ) -> NormalEquations = accumulate_kernel;
+}
 
-    pub(super) fn new() -> Self {
-        Accumulator {
-            h: [[0.0; 8]; 6],
-            g: [0.0; 8],
-            run: 0,
-            total: NormalEquations::default(),
+#[inline(always)]
+fn accumulate_kernel(
+    ri: &[f32],
+    rz: &[f32],
+    sz: &[f32],
+    gx: &[f32],
+    gy: &[f32],
+    dx: &[f32],
+    dy: &[f32],
+    x: &[f32],
+    y: &[f32],
+    z: &[f32],
+    wh: &Whitener,
+    f: &[f32; 2],
+) -> NormalEquations {
+    let n = ri.len();
+    let mut total = NormalEquations::default();
+    let zero = lanes::splat(0.0);
+    let (fx, fy) = (lanes::splat(f[0]), lanes::splat(f[1]));
+    for start in (0..n).step_by(RUN) {
+        let mut h = [zero; H];
+        let mut g = [zero; 6];
+        for b in (start..n.min(start + RUN)).step_by(LANES) {
+            let r = lanes::load(ri, b);
+            let q = weigh(wh, r, lanes::load(rz, b));
+            let p = [lanes::load(x, b), lanes::load(y, b), lanes::load(z, b)];
+            let (ji, jz) = jacobians(
+                p,
+                [lanes::load(gx, b), lanes::load(gy, b)],
+                [lanes::load(dx, b), lanes::load(dy, b)],
+                lanes::load(sz, b),
+                fx,
+                fy,
+            );
+            // L r and L J with Σ⁻¹ = Lᵀ L: two whitened rows; without depth the
+            // second is 0 and the first is l1d J_I.
+            let l1 = lanes::select(q.two, lanes::splat(wh.l11), lanes::splat(wh.l1d));
+            let l12 = lanes::select(q.two, lanes::splat(wh.l12), zero);
+            let jz: [V; 6] = std::array::from_fn(|k| lanes::select(q.two, jz[k], zero));
+            let a: [V; 6] =
+                std::array::from_fn(|k| lanes::add(lanes::mul(l1, ji[k]), lanes::mul(l12, jz[k])));
+            let c: [V; 6] = std::array::from_fn(|k| lanes::mul(lanes::splat(wh.l22), jz[k]));
+            add_row(&mut h, &mut g, &a, q.a, q.w);
+            add_row(&mut h, &mut g, &c, q.b, q.w);
+        }
+        for k in 0..H {
+            total.h[k] += lanes::sum64(&h[k]);
+        }
+        for i in 0..6 {
+            total.g[i] += lanes::sum64(&g[i]);
         }
     }
+    total
+}
 
-    #[inline(always)]
-    pub(super) fn add(&mut self, j: &JRow, r: f32, w: f32) {
-        let wj: JRow = std::array::from_fn(|b| w * j[b]);
-        for (row, &wa) in self.h.iter_mut().zip(&wj) {
-            for (h, &jb) in row.iter_mut().zip(j) {
-                *h += wa * jb;
-            }
+/// `h += w jᵀj` (upper triangle) and `g += w jᵀ r` for one whitened row per lane.
+#[inline(always)]
+fn add_row(h: &mut [V; H], g: &mut [V; 6], j: &[V; 6], r: V, w: V) {
+    let wj: [V; 6] = std::array::from_fn(|k| lanes::mul(w, j[k]));
+    let mut k = 0;
+    for a in 0..6 {
+        for b in a..6 {
+            lanes::acc(&mut h[k], lanes::mul(wj[a], j[b]));
+            k += 1;
         }
-        for (g, &wa) in self.g.iter_mut().zip(&wj) {
-            *g += wa * r;
-        }
-    }
-
-    #[inline(always)]
-    pub(super) fn end_pixel(&mut self) {
-        self.total.count += 1;
-        self.run += 1;
-        if self.run == Self::RUN {
-            self.flush();
-        }
-    }
-
-    fn flush(&mut self) {
-        let mut k = 0;
-        for a in 0..6 {
-            for b in a..6 {
-                self.total.h[k] += self.h[a][b] as f64;
-                k += 1;
-            }
-            self.total.g[a] += self.g[a] as f64;
-        }
-        self.h = [[0.0; 8]; 6];
-        self.g = [0.0; 8];
-        self.run = 0;
-    }
-
-    pub(super) fn finish(mut self) -> NormalEquations {
-        self.flush();
-        self.total
+        lanes::acc(&mut g[a], lanes::mul(wj[a], r));
     }
 }
 
-/// The Jacobians of the photometric and (when present) scaled depth residuals of
-/// one warped point with respect to a left perturbation `exp(δ) T`:
+/// The Jacobians of the photometric and scaled depth residuals of a block of warped
+/// points `p` with respect to a left perturbation `exp(δ) T`:
 /// `J_I = ∇I · ∂π/∂p · [I | −[p]×]` and `J_Z = s (∇D · ∂π/∂p − e_z) · [I | −[p]×]`,
 /// with `s` the depth residual's gain (held fixed, as IRLS holds a weight fixed).
+/// `J_Z` is garbage (NaN) where the depth is missing.
 #[inline(always)]
-pub(super) fn jacobians(r: &Residual, fx: f32, fy: f32) -> (JRow, Option<JRow>) {
-    let [x, y, z] = r.p;
-    let iz = 1.0 / z;
+pub(super) fn jacobians(p: [V; 3], gi: [V; 2], gz: [V; 2], s: V, fx: V, fy: V) -> ([V; 6], [V; 6]) {
+    use lanes::{add, mul, splat, sub};
+    let [x, y, z] = p;
+    let iz = lanes::div(splat(1.0), z);
+    let iz2 = |v: V| mul(mul(v, iz), iz);
+    let neg = |v: V| lanes::zip(v, v, |a, _| -a);
     let a = [
-        r.gx * fx * iz,
-        r.gy * fy * iz,
-        -(r.gx * fx * x + r.gy * fy * y) * iz * iz,
+        mul(mul(gi[0], fx), iz),
+        mul(mul(gi[1], fy), iz),
+        iz2(neg(add(mul(mul(gi[0], fx), x), mul(mul(gi[1], fy), y)))),
     ];
-    let jz = r.rz.is_finite().then(|| {
-        let s = r.sz;
-        let b = [
-            s * r.dx * fx * iz,
-            s * r.dy * fy * iz,
-            s * (-(r.dx * fx * x + r.dy * fy * y) * iz * iz - 1.0),
-        ];
-        twist_row(b, r.p)
-    });
-    (twist_row(a, r.p), jz)
+    let b = [
+        mul(mul(mul(s, gz[0]), fx), iz),
+        mul(mul(mul(s, gz[1]), fy), iz),
+        mul(
+            s,
+            sub(
+                iz2(neg(add(mul(mul(gz[0], fx), x), mul(mul(gz[1], fy), y)))),
+                splat(1.0),
+            ),
+        ),
+    ];
+    (twist_row(a, p), twist_row(b, p))
 }
 
-/// `a · [I | −[p]×] = [a, p × a]`, padded.
+/// `a · [I | −[p]×] = [a, p × a]`.
 #[inline(always)]
-fn twist_row(a: [f32; 3], p: [f32; 3]) -> JRow {
+fn twist_row(a: [V; 3], p: [V; 3]) -> [V; 6] {
+    use lanes::{mul, sub};
     [
         a[0],
         a[1],
         a[2],
-        p[1] * a[2] - p[2] * a[1],
-        p[2] * a[0] - p[0] * a[2],
-        p[0] * a[1] - p[1] * a[0],
-        0.0,
-        0.0,
+        sub(mul(p[1], a[2]), mul(p[2], a[1])),
+        sub(mul(p[2], a[0]), mul(p[0], a[2])),
+        sub(mul(p[0], a[1]), mul(p[1], a[0])),
     ]
 }

@@ -1,111 +1,411 @@
-//! Warping the template into the current frame: residuals and what the Jacobians need.
+//! Warping the template into the current frame, structure of arrays: the template
+//! points and the residuals are one `f32` slice per quantity.
+//!
+//! A warp runs three loops over a chunk: [`project`] moves and projects every point
+//! and finds its bilinear cell (a plain loop the compiler vectorises); [`gather`]
+//! interpolates the six channels of the level at the points that landed inside it
+//! (one 8-lane vector per point: a level's pixel is 32 bytes) and packs those points
+//! to the front of the arrays, branch-free; [`depth`] turns the interpolated depth
+//! into the scaled depth residual (vectorised again). Every point goes through the
+//! same IEEE operations, in the same order, as the per-point warp this replaced.
 
+use super::lanes::LANES;
 use crate::prepare::Sample;
-use crate::scale;
+use crate::prepare::simd::multiversion;
 
-/// One warped template point: its residuals and what its Jacobian needs.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Residual {
-    /// Photometric residual.
-    pub(super) ri: f32,
-    /// Depth residual times its gain `sz`, NaN when the current depth is missing there.
-    pub(super) rz: f32,
-    /// The depth residual's gain: λ, or λ / z² with the quadratic noise model.
-    pub(super) sz: f32,
-    /// Intensity gradient at `u'` (per pixel).
-    pub(super) gx: f32,
-    pub(super) gy: f32,
-    /// Depth gradient at `u'` (metres per pixel).
-    pub(super) dx: f32,
-    pub(super) dy: f32,
-    /// The warped point `T q` in current-camera coordinates.
-    pub(super) p: [f32; 3],
+/// One chunk of a template, `[x, y, z, intensity]` of each point split into arrays.
+#[derive(Clone, Debug, Default)]
+pub(super) struct TemplateChunk {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+    i: Vec<f32>,
 }
 
-impl scale::Pair for Residual {
-    #[inline(always)]
-    fn ri(&self) -> f32 {
-        self.ri
+impl TemplateChunk {
+    /// A chunk with room for `n` points.
+    pub(super) fn with_capacity(n: usize) -> Self {
+        let v = || Vec::with_capacity(n);
+        TemplateChunk {
+            x: v(),
+            y: v(),
+            z: v(),
+            i: v(),
+        }
     }
-    #[inline(always)]
-    fn rz(&self) -> f32 {
-        self.rz
+
+    /// Takes the points `pts`.
+    pub(super) fn load(&mut self, pts: &[[f32; 4]]) {
+        for (c, a) in [&mut self.x, &mut self.y, &mut self.z, &mut self.i]
+            .into_iter()
+            .enumerate()
+        {
+            a.clear();
+            a.extend(pts.iter().map(|q| q[c]));
+        }
+    }
+}
+
+/// The residuals of one chunk after a warp: the `n` points that landed inside the
+/// level, in template order, then neutral points up to a multiple of [`LANES`]
+/// (zero residuals, gradients and gain at `(0, 0, 1)`: every sum over them adds
+/// zeros), so that the summing loops run on whole blocks.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Chunk {
+    /// Residuals stored.
+    pub(super) n: usize,
+    /// Residuals with a depth residual.
+    pub(super) two: usize,
+    /// Photometric residual.
+    pub(super) ri: Vec<f32>,
+    /// Depth residual times its gain `sz`, NaN when the current depth is missing.
+    pub(super) rz: Vec<f32>,
+    /// The depth residual's gain: λ, or λ / z² with the quadratic noise model.
+    pub(super) sz: Vec<f32>,
+    /// Intensity gradient at `u'` (per pixel).
+    pub(super) gx: Vec<f32>,
+    /// See `gx`.
+    pub(super) gy: Vec<f32>,
+    /// Depth gradient at `u'` (metres per pixel).
+    pub(super) dx: Vec<f32>,
+    /// See `dx`.
+    pub(super) dy: Vec<f32>,
+    /// The warped point `T q` in current-camera coordinates.
+    pub(super) x: Vec<f32>,
+    /// See `x`.
+    pub(super) y: Vec<f32>,
+    /// See `x`.
+    pub(super) z: Vec<f32>,
+    /// Scratch of the warp: index of the bilinear cell's top-left pixel (-1 when the
+    /// point misses the level) and the offsets in the cell.
+    cell: Vec<i32>,
+    ax: Vec<f32>,
+    ay: Vec<f32>,
+}
+
+impl Chunk {
+    /// A chunk with room for `n` template points.
+    pub(super) fn with_capacity(n: usize) -> Self {
+        let n = n.next_multiple_of(LANES);
+        let v = || Vec::with_capacity(n);
+        Chunk {
+            n: 0,
+            two: 0,
+            ri: v(),
+            rz: v(),
+            sz: v(),
+            gx: v(),
+            gy: v(),
+            dx: v(),
+            dy: v(),
+            x: v(),
+            y: v(),
+            z: v(),
+            cell: Vec::with_capacity(n),
+            ax: v(),
+            ay: v(),
+        }
+    }
+
+    /// The stored residuals and the padding after them.
+    pub(super) fn padded(&self) -> usize {
+        self.n.next_multiple_of(LANES)
     }
 }
 
 /// The warp of one linearisation: `T_{j→i}`, the current level's intrinsics and
 /// samples. Shared by the chunks of the parallel loop.
 pub(super) struct Warp<'a> {
+    /// `T_{j→i}`, rows of `[R | t]`.
     pub(super) r: [[f32; 4]; 3],
     /// fx, fy, cx, cy.
     pub(super) f: [f32; 4],
+    /// Level width.
     pub(super) w: usize,
     /// Largest u and v a bilinear lookup may start from (exclusive).
     pub(super) max: [f32; 2],
+    /// The level's pixels.
     pub(super) samples: &'a [Sample],
+    /// λ.
     pub(super) lambda: f32,
+    /// The quadratic depth noise model.
     pub(super) quadratic: bool,
 }
 
 impl Warp<'_> {
-    /// Warps `points` and stores the residuals of those that land inside the level.
-    pub(super) fn run(&self, points: &[[f32; 4]], out: &mut Vec<Residual>) {
-        let r = &self.r;
-        let [fx, fy, cx, cy] = self.f;
-        let [umax, vmax] = self.max;
-        out.clear();
-        for q in points {
-            let x = r[0][0] * q[0] + r[0][1] * q[1] + r[0][2] * q[2] + r[0][3];
-            let y = r[1][0] * q[0] + r[1][1] * q[1] + r[1][2] * q[2] + r[1][3];
-            let z = r[2][0] * q[0] + r[2][1] * q[1] + r[2][2] * q[2] + r[2][3];
-            if z <= 1e-3 {
-                continue;
-            }
-            let iz = 1.0 / z;
-            let u = fx * x * iz + cx;
-            let v = fy * y * iz + cy;
-            // `!(a >= b)` also rejects NaN.
-            if !(u >= 0.0 && v >= 0.0 && u < umax && v < vmax) {
-                continue;
-            }
-            let s = bilinear(self.samples, self.w, u, v);
-            let ri = s[0] - q[3];
-            let rz = s[3] - z;
-            let depth_ok = rz.is_finite() && s[4].is_finite() && s[5].is_finite();
-            // The depth residual's gain: λ, over z² for the quadratic noise model.
-            let sz = if self.quadratic {
-                let ze = z.max(0.3);
-                self.lambda / (ze * ze)
-            } else {
-                self.lambda
-            };
-            out.push(Residual {
-                ri,
-                rz: if depth_ok { sz * rz } else { f32::NAN },
-                sz,
-                gx: s[1],
-                gy: s[2],
-                dx: s[4],
-                dy: s[5],
-                p: [x, y, z],
-            });
+    /// Warps the points of `q` and stores the residuals of those that land inside the
+    /// level in `out`.
+    pub(super) fn run(&self, q: &TemplateChunk, out: &mut Chunk) {
+        let m = q.x.len();
+        let len = m.next_multiple_of(LANES);
+        for a in [
+            &mut out.ri,
+            &mut out.rz,
+            &mut out.sz,
+            &mut out.gx,
+            &mut out.gy,
+            &mut out.dx,
+            &mut out.dy,
+            &mut out.x,
+            &mut out.y,
+            &mut out.z,
+            &mut out.ax,
+            &mut out.ay,
+        ] {
+            a.resize(len, 0.0);
         }
+        out.cell.resize(len, -1);
+        project(
+            &self.r,
+            &self.f,
+            &self.max,
+            self.w as i32,
+            &q.x,
+            &q.y,
+            &q.z,
+            &mut out.x[..m],
+            &mut out.y[..m],
+            &mut out.z[..m],
+            &mut out.cell[..m],
+            &mut out.ax[..m],
+            &mut out.ay[..m],
+        );
+        let n = gather(
+            self.samples,
+            self.w,
+            &q.i,
+            &out.cell[..m],
+            &out.ax[..m],
+            &out.ay[..m],
+            &mut out.x[..m],
+            &mut out.y[..m],
+            &mut out.z[..m],
+            &mut out.ri[..m],
+            &mut out.rz[..m],
+            &mut out.gx[..m],
+            &mut out.gy[..m],
+            &mut out.dx[..m],
+            &mut out.dy[..m],
+        );
+        depth(
+            self.lambda,
+            self.quadratic,
+            &out.z[..n],
+            &out.dx[..n],
+            &out.dy[..n],
+            &mut out.rz[..n],
+            &mut out.sz[..n],
+        );
+        out.n = n;
+        out.two = out.rz[..n].iter().filter(|r| r.is_finite()).count();
+        let end = n.next_multiple_of(LANES);
+        for a in [
+            &mut out.ri,
+            &mut out.rz,
+            &mut out.sz,
+            &mut out.gx,
+            &mut out.gy,
+            &mut out.dx,
+            &mut out.dy,
+            &mut out.x,
+            &mut out.y,
+        ] {
+            a[n..end].fill(0.0);
+        }
+        out.z[n..end].fill(1.0);
     }
 }
 
-/// Bilinear lookup of all channels at `(u, v)`; the caller guarantees
-/// `0 <= u < w - 1` and `0 <= v < h - 1`. Missing depth (NaN) propagates.
+multiversion! {
+    /// Moves and projects every template point; `cell` gets the index of the top-left
+    /// pixel of its bilinear cell, or -1 when it does not land inside the level.
+    fn project(
+        r: &[[f32; 4]; 3],
+        f: &[f32; 4],
+        max: &[f32; 2],
+        w: i32,
+        qx: &[f32],
+        qy: &[f32],
+        qz: &[f32],
+        x: &mut [f32],
+        y: &mut [f32],
+        z: &mut [f32],
+        cell: &mut [i32],
+        ax: &mut [f32],
+        ay: &mut [f32],
+    ) = project_kernel;
+}
+
 #[inline(always)]
-fn bilinear(s: &[Sample], w: usize, u: f32, v: f32) -> Sample {
-    let (x0, y0) = (u as usize, v as usize);
-    let (ax, ay) = (u - x0 as f32, v - y0 as f32);
-    let i = y0 * w + x0;
-    let (p00, p01, p10, p11) = (&s[i], &s[i + 1], &s[i + w], &s[i + w + 1]);
-    let (w00, w01, w10, w11) = (
-        (1.0 - ax) * (1.0 - ay),
-        ax * (1.0 - ay),
-        (1.0 - ax) * ay,
-        ax * ay,
+fn project_kernel(
+    r: &[[f32; 4]; 3],
+    f: &[f32; 4],
+    max: &[f32; 2],
+    w: i32,
+    qx: &[f32],
+    qy: &[f32],
+    qz: &[f32],
+    x: &mut [f32],
+    y: &mut [f32],
+    z: &mut [f32],
+    cell: &mut [i32],
+    ax: &mut [f32],
+    ay: &mut [f32],
+) {
+    let m = x.len();
+    let (qx, qy, qz) = (&qx[..m], &qy[..m], &qz[..m]);
+    let (y, z, cell, ax, ay) = (
+        &mut y[..m],
+        &mut z[..m],
+        &mut cell[..m],
+        &mut ax[..m],
+        &mut ay[..m],
     );
-    std::array::from_fn(|c| w00 * p00[c] + w01 * p01[c] + w10 * p10[c] + w11 * p11[c])
+    let [fx, fy, cx, cy] = *f;
+    let [umax, vmax] = *max;
+    for k in 0..m {
+        let q = [qx[k], qy[k], qz[k]];
+        let px = r[0][0] * q[0] + r[0][1] * q[1] + r[0][2] * q[2] + r[0][3];
+        let py = r[1][0] * q[0] + r[1][1] * q[1] + r[1][2] * q[2] + r[1][3];
+        let pz = r[2][0] * q[0] + r[2][1] * q[1] + r[2][2] * q[2] + r[2][3];
+        let iz = 1.0 / pz;
+        let u = fx * px * iz + cx;
+        let v = fy * py * iz + cy;
+        // Every comparison is false for NaN.
+        let ok = (pz > 1e-3) & (u >= 0.0) & (v >= 0.0) & (u < umax) & (v < vmax);
+        let (u, v) = if ok { (u, v) } else { (0.0, 0.0) };
+        let (x0, y0) = (u as i32, v as i32);
+        x[k] = px;
+        y[k] = py;
+        z[k] = pz;
+        ax[k] = u - x0 as f32;
+        ay[k] = v - y0 as f32;
+        cell[k] = if ok { y0 * w + x0 } else { -1 };
+    }
+}
+
+multiversion! {
+    /// Bilinear lookup of the six channels at the points whose `cell` is not -1; their
+    /// warped coordinates, photometric residual (`qi` is the template's intensity),
+    /// interpolated depth (in `dz`) and gradients are packed to the front of the
+    /// arrays, in order. Returns how many there are.
+    fn gather(
+        s: &[Sample],
+        w: usize,
+        qi: &[f32],
+        cell: &[i32],
+        ax: &[f32],
+        ay: &[f32],
+        x: &mut [f32],
+        y: &mut [f32],
+        z: &mut [f32],
+        ri: &mut [f32],
+        dz: &mut [f32],
+        gx: &mut [f32],
+        gy: &mut [f32],
+        dx: &mut [f32],
+        dy: &mut [f32],
+    ) -> usize = gather_kernel;
+}
+
+#[inline(always)]
+fn gather_kernel(
+    s: &[Sample],
+    w: usize,
+    qi: &[f32],
+    cell: &[i32],
+    ax: &[f32],
+    ay: &[f32],
+    x: &mut [f32],
+    y: &mut [f32],
+    z: &mut [f32],
+    ri: &mut [f32],
+    dz: &mut [f32],
+    gx: &mut [f32],
+    gy: &mut [f32],
+    dx: &mut [f32],
+    dy: &mut [f32],
+) -> usize {
+    let m = cell.len();
+    let (qi, ax, ay) = (&qi[..m], &ax[..m], &ay[..m]);
+    let (x, y, z) = (&mut x[..m], &mut y[..m], &mut z[..m]);
+    let (ri, dz, gx, gy, dx, dy) = (
+        &mut ri[..m],
+        &mut dz[..m],
+        &mut gx[..m],
+        &mut gy[..m],
+        &mut dx[..m],
+        &mut dy[..m],
+    );
+    let mut n = 0;
+    for k in 0..m {
+        let c = cell[k];
+        // A point outside the level reads the first cell and is not kept.
+        let i = c.max(0) as usize;
+        let (ax, ay) = (ax[k], ay[k]);
+        let (p00, p01, p10, p11) = (&s[i], &s[i + 1], &s[i + w], &s[i + w + 1]);
+        let (w00, w01, w10, w11) = (
+            (1.0 - ax) * (1.0 - ay),
+            ax * (1.0 - ay),
+            (1.0 - ax) * ay,
+            ax * ay,
+        );
+        let v: Sample =
+            std::array::from_fn(|c| w00 * p00[c] + w01 * p01[c] + w10 * p10[c] + w11 * p11[c]);
+        // n <= k: the point is read before its slot is (over)written.
+        let (px, py, pz) = (x[k], y[k], z[k]);
+        x[n] = px;
+        y[n] = py;
+        z[n] = pz;
+        ri[n] = v[0] - qi[k];
+        gx[n] = v[1];
+        gy[n] = v[2];
+        dz[n] = v[3];
+        dx[n] = v[4];
+        dy[n] = v[5];
+        n += (c >= 0) as usize;
+    }
+    n
+}
+
+multiversion! {
+    /// Turns the interpolated depth in `rz` into the scaled depth residual
+    /// `sz (D(u') − z)`, NaN where the depth or its gradient is missing, and stores
+    /// the gain `sz`.
+    fn depth(
+        lambda: f32,
+        quadratic: bool,
+        z: &[f32],
+        dx: &[f32],
+        dy: &[f32],
+        rz: &mut [f32],
+        sz: &mut [f32],
+    ) = depth_kernel;
+}
+
+#[inline(always)]
+fn depth_kernel(
+    lambda: f32,
+    quadratic: bool,
+    z: &[f32],
+    dx: &[f32],
+    dy: &[f32],
+    rz: &mut [f32],
+    sz: &mut [f32],
+) {
+    let n = rz.len();
+    let (z, dx, dy, sz) = (&z[..n], &dx[..n], &dy[..n], &mut sz[..n]);
+    for k in 0..n {
+        let r = rz[k] - z[k];
+        let ok = r.is_finite() & dx[k].is_finite() & dy[k].is_finite();
+        // The depth residual's gain: λ, over z² for the quadratic noise model.
+        let s = if quadratic {
+            let ze = z[k].max(0.3);
+            lambda / (ze * ze)
+        } else {
+            lambda
+        };
+        rz[k] = if ok { s * r } else { f32::NAN };
+        sz[k] = s;
+    }
 }
