@@ -5,7 +5,8 @@
 //! and finds its bilinear cell (a plain loop the compiler vectorises); [`gather`]
 //! interpolates the six channels of the level at the points that landed inside it
 //! (one 8-lane vector per point: a level's pixel is 32 bytes) and packs those points
-//! to the front of the arrays, branch-free; [`depth`] turns the interpolated depth
+//! to the front of the arrays, branch-free, before their channels are split into
+//! arrays; [`depth`] turns the interpolated depth
 //! into the scaled depth residual (vectorised again). Every point goes through the
 //! same IEEE operations, in the same order, as the per-point warp this replaced.
 
@@ -81,6 +82,8 @@ pub(super) struct Chunk {
     cell: Vec<i32>,
     ax: Vec<f32>,
     ay: Vec<f32>,
+    /// Scratch of the warp: the interpolated pixel of each point kept.
+    tmp: Vec<Sample>,
 }
 
 impl Chunk {
@@ -104,6 +107,7 @@ impl Chunk {
             cell: Vec::with_capacity(n),
             ax: v(),
             ay: v(),
+            tmp: Vec::with_capacity(n),
         }
     }
 
@@ -155,6 +159,7 @@ impl Warp<'_> {
             a.resize(len, 0.0);
         }
         out.cell.resize(len, -1);
+        out.tmp.resize(len, [0.0; 8]);
         project(
             &self.r,
             &self.f,
@@ -181,20 +186,19 @@ impl Warp<'_> {
             &mut out.y[..m],
             &mut out.z[..m],
             &mut out.ri[..m],
-            &mut out.rz[..m],
-            &mut out.gx[..m],
-            &mut out.gy[..m],
-            &mut out.dx[..m],
-            &mut out.dy[..m],
+            &mut out.tmp[..m],
         );
         depth(
             self.lambda,
             self.quadratic,
+            &out.tmp[..n],
             &out.z[..n],
-            &out.dx[..n],
-            &out.dy[..n],
             &mut out.rz[..n],
             &mut out.sz[..n],
+            &mut out.gx[..n],
+            &mut out.gy[..n],
+            &mut out.dx[..n],
+            &mut out.dy[..n],
         );
         out.n = n;
         out.two = out.rz[..n].iter().filter(|r| r.is_finite()).count();
@@ -274,7 +278,9 @@ fn project_kernel(
         // Every comparison is false for NaN.
         let ok = (pz > 1e-3) & (u >= 0.0) & (v >= 0.0) & (u < umax) & (v < vmax);
         let (u, v) = if ok { (u, v) } else { (0.0, 0.0) };
-        let (x0, y0) = (u as i32, v as i32);
+        // SAFETY: 0 <= u, v < the level's size (or 0): in range of i32. (`as` would
+        // saturate, which does not vectorise.)
+        let (x0, y0): (i32, i32) = unsafe { (u.to_int_unchecked(), v.to_int_unchecked()) };
         x[k] = px;
         y[k] = py;
         z[k] = pz;
@@ -286,9 +292,9 @@ fn project_kernel(
 
 multiversion! {
     /// Bilinear lookup of the six channels at the points whose `cell` is not -1; their
-    /// warped coordinates, photometric residual (`qi` is the template's intensity),
-    /// interpolated depth (in `dz`) and gradients are packed to the front of the
-    /// arrays, in order. Returns how many there are.
+    /// warped coordinates, photometric residual (`qi` is the template's intensity)
+    /// and interpolated pixel (all eight lanes, so that it is one vector) are packed
+    /// to the front of the arrays, in order. Returns how many there are.
     fn gather(
         s: &[Sample],
         w: usize,
@@ -300,11 +306,7 @@ multiversion! {
         y: &mut [f32],
         z: &mut [f32],
         ri: &mut [f32],
-        dz: &mut [f32],
-        gx: &mut [f32],
-        gy: &mut [f32],
-        dx: &mut [f32],
-        dy: &mut [f32],
+        tmp: &mut [Sample],
     ) -> usize = gather_kernel;
 }
 
@@ -320,23 +322,12 @@ fn gather_kernel(
     y: &mut [f32],
     z: &mut [f32],
     ri: &mut [f32],
-    dz: &mut [f32],
-    gx: &mut [f32],
-    gy: &mut [f32],
-    dx: &mut [f32],
-    dy: &mut [f32],
+    tmp: &mut [Sample],
 ) -> usize {
     let m = cell.len();
     let (qi, ax, ay) = (&qi[..m], &ax[..m], &ay[..m]);
     let (x, y, z) = (&mut x[..m], &mut y[..m], &mut z[..m]);
-    let (ri, dz, gx, gy, dx, dy) = (
-        &mut ri[..m],
-        &mut dz[..m],
-        &mut gx[..m],
-        &mut gy[..m],
-        &mut dx[..m],
-        &mut dy[..m],
-    );
+    let (ri, tmp) = (&mut ri[..m], &mut tmp[..m]);
     let mut n = 0;
     for k in 0..m {
         let c = cell[k];
@@ -358,28 +349,27 @@ fn gather_kernel(
         y[n] = py;
         z[n] = pz;
         ri[n] = v[0] - qi[k];
-        gx[n] = v[1];
-        gy[n] = v[2];
-        dz[n] = v[3];
-        dx[n] = v[4];
-        dy[n] = v[5];
+        tmp[n] = v;
         n += (c >= 0) as usize;
     }
     n
 }
 
 multiversion! {
-    /// Turns the interpolated depth in `rz` into the scaled depth residual
-    /// `sz (D(u') − z)`, NaN where the depth or its gradient is missing, and stores
-    /// the gain `sz`.
+    /// Splits the interpolated pixels `tmp` into the gradient arrays, turns their
+    /// depth into the scaled depth residual `sz (D(u') − z)`, NaN where the depth or
+    /// its gradient is missing, and stores the gain `sz`.
     fn depth(
         lambda: f32,
         quadratic: bool,
+        tmp: &[Sample],
         z: &[f32],
-        dx: &[f32],
-        dy: &[f32],
         rz: &mut [f32],
         sz: &mut [f32],
+        gx: &mut [f32],
+        gy: &mut [f32],
+        dx: &mut [f32],
+        dy: &mut [f32],
     ) = depth_kernel;
 }
 
@@ -387,14 +377,26 @@ multiversion! {
 fn depth_kernel(
     lambda: f32,
     quadratic: bool,
+    tmp: &[Sample],
     z: &[f32],
-    dx: &[f32],
-    dy: &[f32],
     rz: &mut [f32],
     sz: &mut [f32],
+    gx: &mut [f32],
+    gy: &mut [f32],
+    dx: &mut [f32],
+    dy: &mut [f32],
 ) {
     let n = rz.len();
-    let (z, dx, dy, sz) = (&z[..n], &dx[..n], &dy[..n], &mut sz[..n]);
+    let (tmp, z, sz) = (&tmp[..n], &z[..n], &mut sz[..n]);
+    let (gx, gy, dx, dy) = (&mut gx[..n], &mut gy[..n], &mut dx[..n], &mut dy[..n]);
+    for k in 0..n {
+        let v = &tmp[k];
+        gx[k] = v[1];
+        gy[k] = v[2];
+        rz[k] = v[3];
+        dx[k] = v[4];
+        dy[k] = v[5];
+    }
     for k in 0..n {
         let r = rz[k] - z[k];
         let ok = r.is_finite() & dx[k].is_finite() & dy[k].is_finite();
