@@ -90,7 +90,7 @@ pub(super) fn chunk(c: &Chunk, wh: &Whitener, f: [f32; 2]) -> NormalEquations {
 
 multiversion! {
     /// `JᵀWJ` and `JᵀWr` of whitened residuals, summed by lane in f32 over runs of
-    /// [`RUN`] points and flushed into f64 in lane order.
+    /// [`RUN`] points, by lane in f64 across runs, then lane after lane.
     fn accumulate(
         ri: &[f32],
         rz: &[f32],
@@ -124,6 +124,8 @@ fn accumulate_kernel(
 ) -> NormalEquations {
     let n = ri.len();
     let mut total = NormalEquations::default();
+    let mut h64 = [lanes::W::default(); H];
+    let mut g64 = [lanes::W::default(); 6];
     let zero = lanes::splat(0.0);
     let (fx, fy) = (lanes::splat(f[0]), lanes::splat(f[1]));
     for start in (0..n).step_by(RUN) {
@@ -153,12 +155,14 @@ fn accumulate_kernel(
             add_row(&mut h, &mut g, &c, q.b, q.w);
         }
         for k in 0..H {
-            total.h[k] += lanes::sum64(&h[k]);
+            lanes::flush(&mut h64[k], &h[k]);
         }
         for i in 0..6 {
-            total.g[i] += lanes::sum64(&g[i]);
+            lanes::flush(&mut g64[i], &g[i]);
         }
     }
+    total.h = h64.map(|t| lanes::sum(&t));
+    total.g = g64.map(|t| lanes::sum(&t));
     total
 }
 
@@ -187,7 +191,7 @@ pub(super) fn jacobians(p: [V; 3], gi: [V; 2], gz: [V; 2], s: V, fx: V, fy: V) -
     let [x, y, z] = p;
     let iz = lanes::div(splat(1.0), z);
     let iz2 = |v: V| mul(mul(v, iz), iz);
-    let neg = |v: V| lanes::zip(v, v, |a, _| -a);
+    let neg = lanes::neg;
     let a = [
         mul(mul(gi[0], fx), iz),
         mul(mul(gi[1], fy), iz),

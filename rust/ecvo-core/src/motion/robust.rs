@@ -20,7 +20,7 @@ const RUN: usize = 256;
 /// What the weight of a block of residuals needs.
 pub(super) struct Weighed {
     /// Lanes with a depth residual.
-    pub(super) two: [u32; LANES],
+    pub(super) two: lanes::M,
     /// `r_Z`, 0 where it is missing.
     pub(super) rz: V,
     /// The whitened photometric row's residual `l11 r_I + l12 r_Z` (`l1d r_I` without
@@ -69,13 +69,14 @@ pub(super) fn pass(c: &Chunk, wh: &Whitener, weighting: Weighting) -> PassSums {
 multiversion! {
     /// `Σ w r_I²`, `Σ w r_I r_Z`, `Σ w r_Z²` over the residuals with depth and
     /// `Σ w r_I²` over the others (`scalar`: half of `w (r_I² + r_Z²)` in the first
-    /// and third), summed by lane in f32 over runs of [`RUN`] points and in f64 across.
+    /// and third), summed by lane in f32 over runs of [`RUN`] points, by lane in f64
+    /// across runs, then lane after lane.
     fn pass_sums(ri: &[f32], rz: &[f32], wh: &Whitener, scalar: bool) -> PassSums = pass_kernel;
 }
 
 #[inline(always)]
 fn pass_kernel(ri: &[f32], rz: &[f32], wh: &Whitener, scalar: bool) -> PassSums {
-    let mut total = [0.0f64; 4];
+    let mut total = [lanes::W::default(); 4];
     let n = ri.len();
     let rz = &rz[..n];
     let zero = lanes::splat(0.0);
@@ -103,10 +104,10 @@ fn pass_kernel(ri: &[f32], rz: &[f32], wh: &Whitener, scalar: bool) -> PassSums 
             lanes::acc(&mut p[3], lanes::select(q.two, zero, ii));
         }
         for k in 0..4 {
-            total[k] += lanes::sum64(&p[k]);
+            lanes::flush(&mut total[k], &p[k]);
         }
     }
-    total
+    total.map(|t| lanes::sum(&t))
 }
 
 /// `Σ w d²` over a chunk at a fixed scale (summed like [`pass_sums`]).
@@ -122,7 +123,7 @@ multiversion! {
 
 #[inline(always)]
 fn cost_kernel(ri: &[f32], rz: &[f32], wh: &Whitener) -> f64 {
-    let mut total = 0.0f64;
+    let mut total = lanes::W::default();
     let n = ri.len();
     let rz = &rz[..n];
     for start in (0..n).step_by(RUN) {
@@ -131,9 +132,9 @@ fn cost_kernel(ri: &[f32], rz: &[f32], wh: &Whitener) -> f64 {
             let q = weigh(wh, lanes::load(ri, b), lanes::load(rz, b));
             lanes::acc(&mut e, lanes::mul(q.w, q.d2));
         }
-        total += lanes::sum64(&e);
+        lanes::flush(&mut total, &e);
     }
-    total
+    lanes::sum(&total)
 }
 
 /// The plain second moments of a chunk's residuals (weight 1 everywhere), in f64 and

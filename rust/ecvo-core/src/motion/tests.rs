@@ -108,7 +108,10 @@ fn analytic_jacobians_match_finite_differences() {
                 f.1,
             );
             for l in 0..lanes::LANES {
-                jac.push((ji.map(|j| j[l]), jz.map(|j| j[l])));
+                jac.push((
+                    ji.map(|j| lanes::to_array(j)[l]),
+                    jz.map(|j| lanes::to_array(j)[l]),
+                ));
             }
         }
         let h = 1e-4;
