@@ -199,7 +199,7 @@ pub fn initial_scale<R: Pair>(chunks: &[Vec<R>], weighting: Weighting) -> Option
     let mut sums = [0.0f64; 4];
     let (mut two, mut one) = (0, 0);
     for c in chunks {
-        let p = pass_unweighted(c, weighting);
+        let p = moments(c, weighting);
         for k in 0..4 {
             sums[k] += p[k];
         }
@@ -210,8 +210,9 @@ pub fn initial_scale<R: Pair>(chunks: &[Vec<R>], weighting: Weighting) -> Option
     next_scale(&sums, two, one, weighting)
 }
 
-/// The plain second moments of a chunk (weight 1 everywhere, ν → ∞).
-fn pass_unweighted<R: Pair>(chunk: &[R], weighting: Weighting) -> PassSums {
+/// The plain second moments of a chunk (weight 1 everywhere, ν → ∞), in f64 and
+/// point order.
+pub fn moments<R: Pair>(chunk: &[R], weighting: Weighting) -> PassSums {
     let mut acc = [0.0f64; 4];
     for r in chunk {
         let (ri, rz) = (r.ri() as f64, r.rz() as f64);

@@ -47,7 +47,7 @@ mod pyramid;
 #[cfg(test)]
 mod reference;
 mod removal;
-mod simd;
+pub(crate) mod simd;
 #[cfg(test)]
 mod tests;
 

@@ -1,0 +1,332 @@
+//! The Gauss-Newton schedule of `MOTION`: coarse-to-fine steps, the choice between
+//! initial guesses, the acceptance of updates and the scale fit. The per-point loops
+//! it drives are behind [`Loops`], so that the reference implementation kept for the
+//! tests runs the very same schedule.
+
+use nalgebra::{Matrix6, SymmetricEigen};
+
+use super::{Failure, MAX_STARTS, MAX_STEPS, MotionResult, NormalEquations, Status};
+use crate::Pose;
+use crate::config::{DepthNoiseModel, MotionConfig, MotionLevel, Weighting};
+use crate::prepare::{ImageLevel, PreparedFrame};
+use crate::scale::{self, PassSums, Scale, Whitener};
+use crate::se3;
+
+/// The per-point loops over the residuals of the last warp. Every sum runs over
+/// fixed chunks of template points and adds their partial sums in chunk order.
+pub(super) trait Loops {
+    /// Takes the template points of the next coarse-to-fine step.
+    fn load(&mut self, points: &[[f32; 4]]);
+    /// Warps the loaded template into `level` under `t` (`T_{j→i}`) and stores the
+    /// residuals of the points that land inside it; returns how many there are.
+    fn warp(&mut self, t: &Pose, level: &ImageLevel, p: &Params) -> usize;
+    /// Residuals stored by the last warp.
+    fn valid(&self) -> usize;
+    /// Stored residuals with a depth residual, and without.
+    fn counts(&self) -> (usize, usize);
+    /// The plain second moments of the stored residuals (see
+    /// [`scale::initial_scale`]).
+    fn moments(&self, weighting: Weighting) -> PassSums;
+    /// One fixed-point pass of the scale fit at the scale `wh`.
+    fn pass(&mut self, wh: &Whitener, weighting: Weighting) -> PassSums;
+    /// `Σ w d²` over the stored residuals at the scale `wh`.
+    fn cost(&mut self, wh: &Whitener) -> f64;
+    /// Weights and whitens the stored residuals and accumulates the normal
+    /// equations; `error` is their [`Self::cost`], computed first.
+    fn normal_equations(
+        &mut self,
+        level: &ImageLevel,
+        wh: &Whitener,
+        error: f64,
+    ) -> NormalEquations;
+}
+
+/// Smallest number of residuals a coarse step needs to be worth solving.
+const MIN_STEP_RESIDUALS: usize = 24;
+
+/// Most fixed-point passes of one scale fit.
+const MAX_SCALE_PASSES: usize = 20;
+
+/// The settings of one `MOTION` call, in the form the per-pixel loops use.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Params {
+    /// ν.
+    pub(super) nu: f32,
+    /// λ.
+    pub(super) lambda: f32,
+    /// The scale's form.
+    pub(super) weighting: Weighting,
+    /// The quadratic depth noise model.
+    pub(super) quadratic_noise: bool,
+}
+
+impl Params {
+    pub(super) fn of(cfg: &MotionConfig) -> Params {
+        Params {
+            nu: cfg.t_dof as f32,
+            lambda: cfg.depth_gain as f32,
+            weighting: cfg.weighting,
+            quadratic_noise: cfg.depth_noise == DepthNoiseModel::Quadratic,
+        }
+    }
+}
+
+/// What one coarse-to-fine step left.
+#[derive(Clone, Copy, Debug)]
+struct StepOutcome {
+    /// `T_{j→i}` at the end of the step.
+    t: Pose,
+    /// The normal equations of the last linearisation (None: the step never had
+    /// enough residuals).
+    ne: Option<NormalEquations>,
+    /// Gauss-Newton iterations run (steps solved).
+    iterations: u32,
+    /// True when the step used all its iterations, each one accepted.
+    hit_max: bool,
+    /// The scale at the end of the step.
+    scale: Option<Scale>,
+    /// Mean robust cost at `t` for `scale`.
+    cost: f64,
+    /// Residuals at `t`.
+    valid: usize,
+}
+
+/// `MOTION` from the best of several initial guesses: the coarsest step runs from
+/// each, and the one whose result explains the template best (the lowest mean
+/// robust cost at a common scale, a template point that leaves the image costing
+/// as much as the worst outlier) goes on to the finer steps. Ties go to the
+/// earlier guess. [`MotionResult::start`] says which one won. At most
+/// [`MAX_STARTS`] guesses are tried.
+pub(super) fn motion_from<K: Loops>(
+    lp: &mut K,
+    fi: &PreparedFrame,
+    fj: &PreparedFrame,
+    inits: &[Pose],
+    cfg: &MotionConfig,
+) -> MotionResult {
+    let first = inits.first().copied().unwrap_or_else(Pose::identity);
+    let mut result = MotionResult {
+        pose: first,
+        iterations: [0; MAX_STEPS],
+        steps: cfg.levels.len().min(MAX_STEPS),
+        error: f64::NAN,
+        valid_pixels: 0,
+        information: Matrix6::zeros(),
+        scale: None,
+        start: 0,
+        status: Status::Failed(Failure::TooFewPixels),
+    };
+    if inits.is_empty() || !inits.iter().all(se3::is_finite) {
+        result.status = Status::Failed(Failure::NotFinite);
+        return result;
+    }
+    let p = Params::of(cfg);
+    let mut last_step: Option<StepOutcome> = None;
+    let mut scale: Option<Scale> = None;
+    let mut t = first.inverse();
+    for (k, step) in cfg.levels.iter().enumerate().take(MAX_STEPS) {
+        let (Some(level), Some(template)) =
+            (fi.levels.get(step.pyramid_level), fj.templates.get(k))
+        else {
+            break;
+        };
+        lp.load(&template.points);
+        let out = if k == 0 && inits.len() > 1 {
+            let (best, out) = best_start(lp, level, template.points.len(), inits, step, cfg, &p);
+            result.start = best as u8;
+            out
+        } else {
+            run_step(lp, level, t, step, cfg, &p, scale)
+        };
+        result.iterations[k] = out.iterations;
+        t = out.t;
+        if out.scale.is_some() {
+            scale = out.scale;
+        }
+        last_step = Some(out);
+    }
+
+    let Some(last) = last_step else {
+        return result;
+    };
+    let Some(ne) = last.ne else {
+        return result;
+    };
+    result.error = last.cost;
+    result.valid_pixels = last.valid;
+    result.information = ne.hessian();
+    result.scale = last.scale;
+    let pose = t.inverse();
+    result.status = if last.valid < cfg.min_valid_pixels {
+        Status::Failed(Failure::TooFewPixels)
+    } else if !se3::is_finite(&pose) {
+        Status::Failed(Failure::NotFinite)
+    } else if is_degenerate(&result.information) {
+        Status::Failed(Failure::Degenerate)
+    } else if pose.translation.vector.norm() > cfg.max_translation_m
+        || se3::angle(&pose).to_degrees() > cfg.max_rotation_deg
+    {
+        Status::Failed(Failure::TooLarge)
+    } else if last.scale.is_some_and(|s| {
+        s.ii.sqrt() > cfg.max_intensity_sigma
+            || s.zz.sqrt() > cfg.max_depth_sigma_m * cfg.depth_gain.max(1e-9)
+    }) {
+        Status::Failed(Failure::Inconsistent)
+    } else if last.hit_max {
+        Status::MaxIterations
+    } else {
+        Status::Converged
+    };
+    if result.is_ok() {
+        result.pose = pose;
+    }
+    result
+}
+
+/// Runs the first step from every guess and keeps the best (see
+/// [`Self::motion_from`]); returns its index and outcome.
+fn best_start<K: Loops>(
+    lp: &mut K,
+    level: &ImageLevel,
+    points: usize,
+    inits: &[Pose],
+    step: &MotionLevel,
+    cfg: &MotionConfig,
+    p: &Params,
+) -> (usize, StepOutcome) {
+    // On the stack: a warm estimator does not allocate.
+    let mut slots: [Option<StepOutcome>; MAX_STARTS] = [None; MAX_STARTS];
+    for (slot, init) in slots.iter_mut().zip(inits) {
+        *slot = Some(run_step(lp, level, init.inverse(), step, cfg, p, None));
+    }
+    let outs = slots.iter().flatten();
+    // A common scale: the first guess's (the identity's, for [A]).
+    let Some(common) = outs.clone().find_map(|o| o.scale) else {
+        return (0, slots[0].expect("at least one start"));
+    };
+    let wh = common.whitener(p.nu);
+    let total = points.max(1) as f64;
+    let mut best = (0, f64::INFINITY);
+    for (k, o) in outs.enumerate() {
+        if o.ne.is_none() {
+            continue;
+        }
+        lp.warp(&o.t, level, p);
+        let cost = lp.cost(&wh);
+        let missing = (points - lp.valid()) as f64 * wh.max_cost() as f64;
+        let c = (cost + missing) / total;
+        if c < best.1 {
+            best = (k, c);
+        }
+    }
+    (best.0, slots[best.0].expect("the best start ran"))
+}
+
+/// One coarse-to-fine step: Gauss-Newton from `t` with the scale re-fitted after
+/// every accepted update. A update is accepted only if it lowers the mean robust
+/// cost at the scale it was computed with (the IRLS majoriser, so the robust
+/// objective itself does not rise) and leaves enough residuals; otherwise it is
+/// undone and the step ends.
+fn run_step<K: Loops>(
+    lp: &mut K,
+    level: &ImageLevel,
+    mut t: Pose,
+    step: &MotionLevel,
+    cfg: &MotionConfig,
+    p: &Params,
+    start: Option<Scale>,
+) -> StepOutcome {
+    let mut out = StepOutcome {
+        t,
+        ne: None,
+        iterations: 0,
+        hit_max: false,
+        scale: start,
+        cost: f64::NAN,
+        valid: 0,
+    };
+    let mut n = lp.warp(&t, level, p);
+    if n < MIN_STEP_RESIDUALS {
+        return out;
+    }
+    let Some(mut scale) = fit_scale(lp, p, start) else {
+        return out;
+    };
+    let mut wh = scale.whitener(p.nu);
+    let mut cost = lp.cost(&wh) / n as f64;
+    out.hit_max = true;
+    for it in 0..step.max_iterations {
+        let ne = lp.normal_equations(level, &wh, cost * n as f64);
+        out.ne = Some(ne);
+        out.iterations = it + 1;
+        let Some(delta) = ne.solve() else {
+            out.hit_max = false;
+            break;
+        };
+        let candidate = se3::compose(&se3::exp(&delta), &t);
+        let m = lp.warp(&candidate, level, p);
+        if m < MIN_STEP_RESIDUALS {
+            out.hit_max = false;
+            break;
+        }
+        let c = lp.cost(&wh) / m as f64;
+        // `!(c <= cost)` also rejects NaN.
+        if !(c <= cost) {
+            out.hit_max = false;
+            break;
+        }
+        t = candidate;
+        n = m;
+        if let Some(s) = fit_scale(lp, p, Some(scale)) {
+            scale = s;
+            wh = scale.whitener(p.nu);
+        }
+        cost = lp.cost(&wh) / n as f64;
+        let small = delta.fixed_rows::<3>(0).norm() < cfg.min_update
+            && delta.fixed_rows::<3>(3).norm() < cfg.min_update;
+        if small {
+            out.hit_max = false;
+            break;
+        }
+    }
+    out.t = t;
+    out.scale = Some(scale);
+    out.cost = cost;
+    out.valid = n;
+    out
+}
+
+/// Fits the scale to the stored residuals by fixed-point iteration from `start`
+/// (or from their plain second moments); `None` when there is no residual.
+fn fit_scale<K: Loops>(lp: &mut K, p: &Params, start: Option<Scale>) -> Option<Scale> {
+    let (two, one) = lp.counts();
+    let mut s = match start {
+        Some(s) if s.ii > 0.0 && s.zz > 0.0 && s.ii.is_finite() && s.zz.is_finite() => s,
+        _ => scale::next_scale(&lp.moments(p.weighting), two, one, p.weighting)?,
+    };
+    for _ in 0..MAX_SCALE_PASSES {
+        let total = lp.pass(&s.whitener(p.nu), p.weighting);
+        let next = scale::next_scale(&total, two, one, p.weighting)?;
+        let done = scale::settled(&s, &next);
+        s = next;
+        if done {
+            break;
+        }
+    }
+    Some(s)
+}
+
+/// True when the Jacobi-scaled information matrix is nearly singular: some motion
+/// is not observed by the input (a flat, textureless plane, for instance).
+fn is_degenerate(h: &Matrix6<f64>) -> bool {
+    let d: [f64; 6] = std::array::from_fn(|i| h[(i, i)]);
+    if d.iter().any(|&x| !(x > 0.0) || !x.is_finite()) {
+        return true;
+    }
+    let scaled = Matrix6::from_fn(|r, c| h[(r, c)] / (d[r] * d[c]).sqrt());
+    let eig = SymmetricEigen::new(scaled).eigenvalues;
+    let (lo, hi) = eig.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &e| {
+        (lo.min(e), hi.max(e))
+    });
+    !(lo > 1e-6 * hi)
+}
