@@ -163,8 +163,9 @@ struct TrackArgs {
     /// coarsest first, e.g. "3/1/20,2/1/15,1/1/10,0/2/8".
     #[arg(long)]
     schedule: Option<String>,
-    /// Residual weighting: scalar (one σ² over r_I and λ r_Z) or bivariate (Kerl et
-    /// al.'s 2x2 scale matrix).
+    /// Residual weighting: scalar (one σ² over r_I and λ r_Z), bivariate (Kerl et
+    /// al.'s 2x2 scale matrix), or hybrid (bivariate at the coarse steps, scalar at the
+    /// finest).
     #[arg(long, value_enum)]
     weighting: Option<WeightingArg>,
     /// Depth residual noise: constant, or quadratic (σ grows with z²).
@@ -184,6 +185,7 @@ struct TrackArgs {
 enum WeightingArg {
     Scalar,
     Bivariate,
+    Hybrid,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -217,8 +219,9 @@ impl TrackArgs {
             paper: self.paper,
             schedule: self.schedule.clone(),
             weighting: self.weighting.map(|w| match w {
-                WeightingArg::Scalar => Weighting::Scalar,
-                WeightingArg::Bivariate => Weighting::Bivariate,
+                WeightingArg::Scalar => (Weighting::Scalar, None),
+                WeightingArg::Bivariate => (Weighting::Bivariate, None),
+                WeightingArg::Hybrid => (Weighting::Bivariate, Some(Weighting::Scalar)),
             }),
             depth_noise: self.depth_noise.map(|d| match d {
                 DepthNoiseArg::Constant => DepthNoiseModel::Constant,

@@ -53,8 +53,8 @@ pub struct EngineChoice {
     pub paper: bool,
     /// Coarse-to-fine schedule by name.
     pub schedule: Option<String>,
-    /// Residual weighting.
-    pub weighting: Option<ecvo_core::Weighting>,
+    /// Residual weighting, and the finest step's if different.
+    pub weighting: Option<(ecvo_core::Weighting, Option<ecvo_core::Weighting>)>,
     /// Depth noise model.
     pub depth_noise: Option<ecvo_core::DepthNoiseModel>,
     /// What [A] starts from.
@@ -85,8 +85,15 @@ impl EngineChoice {
             |s| s.name().to_string(),
         );
         format!(
-            "schedule {schedule}, {:?} weighting, {:?} depth noise, {:?} prior, correction gate {}",
-            m.weighting, m.depth_noise, m.prior, config.max_correction_distance
+            "schedule {schedule}, {} weighting, {:?} depth noise, {:?} prior, correction gate {}",
+            match m.fine_weighting {
+                Some(f) if f != m.weighting =>
+                    format!("{:?} then {:?} at the finest step", m.weighting, f),
+                _ => format!("{:?}", m.weighting),
+            },
+            m.depth_noise,
+            m.prior,
+            config.max_correction_distance
         )
         .to_lowercase()
     }
@@ -149,8 +156,9 @@ impl TrackSettings {
             config.motion.levels =
                 ecvo_core::parse_schedule(name).with_context(|| format!("--schedule {name}"))?;
         }
-        if let Some(w) = e.weighting {
+        if let Some((w, fine)) = e.weighting {
             config.motion.weighting = w;
+            config.motion.fine_weighting = fine;
         }
         if let Some(d) = e.depth_noise {
             config.motion.depth_noise = d;

@@ -272,6 +272,11 @@ pub struct MotionConfig {
     pub max_rotation_deg: f64,
     /// How residuals are weighted.
     pub weighting: Weighting,
+    /// How the finest step weighs its residuals, if not as `weighting` (then from a
+    /// fresh scale; the spread check refits `weighting`'s form on that step's final
+    /// residuals). Bivariate coarse steps and a scalar finest step is `hybrid` on the
+    /// command line.
+    pub fine_weighting: Option<Weighting>,
     /// How the depth residual's noise grows with depth.
     pub depth_noise: DepthNoiseModel,
     /// What [A] starts from.
@@ -366,6 +371,7 @@ impl Config {
                 max_translation_m: 0.5,
                 max_rotation_deg: 45.0,
                 weighting: Weighting::Bivariate,
+                fine_weighting: None,
                 depth_noise: DepthNoiseModel::Quadratic,
                 prior: MotionPrior::ConstantVelocity,
                 max_intensity_sigma: 0.2,

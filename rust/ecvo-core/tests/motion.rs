@@ -4,7 +4,7 @@ mod common;
 
 use common::*;
 use ecvo_core::motion::{Failure, MotionEstimator, Status};
-use ecvo_core::{FrameView, Mode, Pose, PreparedFrame, Preparer, Schedule};
+use ecvo_core::{FrameView, Mode, Pose, PreparedFrame, Preparer, Schedule, Weighting};
 use ecvo_synth::DepthNoise;
 
 /// Frames `a` (reference) and `b` (current) of a sequence; returns the estimate of
@@ -51,18 +51,22 @@ fn recovers_motion_with_depth_noise_and_outliers() {
     // Stated tolerances with Kinect-like depth noise (disparity steps of ~1 cm at 2 m)
     // and 20 % outliers. Measured worst cases: paper sampling 6.6 mm / 0.15 deg (its
     // finest step uses every 2nd pixel), full-resolution pyramid 3.3 mm / 0.06 deg.
-    for (schedule, max_mm, max_deg) in [
-        (Schedule::PaperSampling, 10.0, 0.25),
-        (Schedule::Pyramid, 5.0, 0.12),
+    // The same with bivariate coarse steps and a scalar finest step (`--weighting
+    // hybrid`).
+    for (schedule, fine, max_mm, max_deg) in [
+        (Schedule::PaperSampling, None, 10.0, 0.25),
+        (Schedule::Pyramid, None, 5.0, 0.12),
+        (Schedule::PyramidStride2, Some(Weighting::Scalar), 5.0, 0.12),
     ] {
-        noisy_with_outliers(schedule, max_mm, max_deg);
+        noisy_with_outliers(schedule, fine, max_mm, max_deg);
     }
 }
 
-fn noisy_with_outliers(schedule: Schedule, max_mm: f64, max_deg: f64) {
+fn noisy_with_outliers(schedule: Schedule, fine: Option<Weighting>, max_mm: f64, max_deg: f64) {
     let seq = sequence(DepthNoise::kinect_like(), 11);
     let mut cfg = config(&seq, Mode::Naive);
     cfg.motion.levels = schedule.levels();
+    cfg.motion.fine_weighting = fine;
     let mut worst = (0.0f64, 0.0f64);
     for (a, b) in [(0, 1), (20, 22), (40, 43), (70, 72)] {
         let fa = seq.frame(a);
@@ -85,6 +89,11 @@ fn noisy_with_outliers(schedule: Schedule, max_mm: f64, max_deg: f64) {
         let (pb, tb) = prepare_raw(&cfg, fb.timestamp, &fb.intensity, &fb.depth, fb.pose);
         let r = MotionEstimator::new().motion(&pb, &pa, &Pose::identity(), &cfg.motion);
         assert!(r.is_ok(), "{a}->{b}: {:?}", r.status);
+        if fine == Some(Weighting::Scalar) {
+            // The finest step's scale is the scalar one: the same over both residuals.
+            let s = r.scale.expect("a scale");
+            assert_eq!((s.ii, s.iz), (s.zz, 0.0), "{a}->{b}: {s:?}");
+        }
         let (dt, da) = pose_error(&r.pose, &(ta.inverse() * tb));
         println!(
             "{schedule:?} {a}->{b}: error {:.3} mm {:.4} deg",

@@ -382,7 +382,7 @@ fn native_point_cloud<'local>(
         let t = tracker(handle)?;
         let max = usize::try_from(max_points)
             .map_err(|_| bad(format!("maxPoints: {max_points} is negative")))?;
-        let v = cloud_floats(&t.pipeline.cloud_snapshot(), max);
+        let v = cloud_floats(&t.pipeline.cloud_sample(max), max);
         let a = env.new_float_array(v.len())?;
         a.set_region(env, 0, &v)?;
         Ok(a)

@@ -544,6 +544,23 @@ impl Pipeline {
         v
     }
 
+    /// At most `max_points` of the cloud's points, taken evenly (point `i * n / k` of
+    /// `n` for `k` taken), copied under the cloud's lock: a viewer asking for a few
+    /// thousand points copies those, not the whole cloud.
+    pub fn cloud_sample(&self, max_points: usize) -> Vec<CloudPoint> {
+        match &self.shared.cloud {
+            Some(c) => {
+                let c = lock(c);
+                let n = c.points.len();
+                let take = n.min(max_points);
+                (0..take)
+                    .map(|i| c.points[if take == n { i } else { i * n / take }])
+                    .collect()
+            }
+            None => Vec::new(),
+        }
+    }
+
     /// Appends the cloud's points from position `from` on to `out` and returns the
     /// cloud's size. The cloud only grows at its end, so a renderer can pass the size
     /// it got last time and copy only the new points.

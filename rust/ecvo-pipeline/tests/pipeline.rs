@@ -210,6 +210,15 @@ fn ui_reads_latest_pose_stats_and_cloud_while_frames_stream() {
         let full = pipeline.cloud_snapshot();
         assert!(incremental.len() <= full.len());
         assert_eq!(incremental[..], full[..incremental.len()]);
+        // A sample is the points at i * n / k, or the whole cloud when it is small.
+        let n = full.len();
+        for k in [0, 1, 7, n / 3, n, n + 5] {
+            let sample = pipeline.cloud_sample(k);
+            let want: Vec<_> = (0..k.min(n))
+                .map(|i| full[if k >= n { i } else { i * n / k }])
+                .collect();
+            assert_eq!(sample, want, "k {k}");
+        }
     });
     let latest = pipeline.latest();
     assert_eq!(latest.tracked, frames.len() as u64);

@@ -124,27 +124,50 @@ pub(super) fn motion_from<K: Loops>(
     let mut last_step: Option<StepOutcome> = None;
     let mut scale: Option<Scale> = None;
     let mut t = first.inverse();
+    let finest = cfg.levels.len().min(MAX_STEPS).saturating_sub(1);
+    // `fine_weighting`: the finest step weighs with its own form, from a fresh scale;
+    // the spread check then refits the configured form on its residuals.
+    let fine = cfg.fine_weighting.filter(|w| *w != p.weighting);
+    let mut fine_level: Option<&ImageLevel> = None;
     for (k, step) in cfg.levels.iter().enumerate().take(MAX_STEPS) {
         let (Some(level), Some(template)) =
             (fi.levels.get(step.pyramid_level), fj.templates.get(k))
         else {
             break;
         };
+        let pk = match fine {
+            Some(weighting) if k == finest => {
+                fine_level = Some(level);
+                Params { weighting, ..p }
+            }
+            _ => p,
+        };
+        let start = if fine_level.is_some() { None } else { scale };
         lp.load(&template.points);
         let out = if k == 0 && inits.len() > 1 {
-            let (best, out) = best_start(lp, level, template.points.len(), inits, step, cfg, &p);
+            let (best, out) = best_start(lp, level, template.points.len(), inits, step, cfg, &pk);
             result.start = best as u8;
             out
         } else {
-            run_step(lp, level, t, step, cfg, &p, scale)
+            run_step(lp, level, t, step, cfg, &pk, start)
         };
         result.iterations[k] = out.iterations;
         t = out.t;
-        if out.scale.is_some() {
+        if out.scale.is_some() && fine_level.is_none() {
             scale = out.scale;
         }
         last_step = Some(out);
     }
+    // The scale the spread check reads: the configured form's, refitted on the finest
+    // step's residuals at its final pose when that step weighed otherwise.
+    let check = match (fine_level, last_step) {
+        (Some(level), Some(_)) => {
+            let pose = t;
+            lp.warp(&pose, level, &p);
+            fit_scale(lp, &p, scale)
+        }
+        (_, last) => last.and_then(|l| l.scale),
+    };
 
     let Some(last) = last_step else {
         return result;
@@ -167,7 +190,7 @@ pub(super) fn motion_from<K: Loops>(
         || se3::angle(&pose).to_degrees() > cfg.max_rotation_deg
     {
         Status::Failed(Failure::TooLarge)
-    } else if last.scale.is_some_and(|s| {
+    } else if check.is_some_and(|s| {
         s.ii.sqrt() > cfg.max_intensity_sigma
             || s.zz.sqrt() > cfg.max_depth_sigma_m * cfg.depth_gain.max(1e-9)
     }) {
