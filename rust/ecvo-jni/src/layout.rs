@@ -73,12 +73,6 @@ pub fn pose_doubles(r: &PoseRecord) -> [f64; POSE_STRIDE] {
     [r.timestamp, t.x, t.y, t.z, q.i, q.j, q.k, q.w]
 }
 
-/// The 8 doubles per pose of `records`, in order (`nativeTrajectorySince` gets them from
-/// `Pipeline::trajectory_since`).
-pub fn poses_doubles(records: &[PoseRecord]) -> Vec<f64> {
-    records.iter().flat_map(pose_doubles).collect()
-}
-
 /// The 15 doubles of `nativeStats` (layout in `TrackerStats.kt`).
 pub fn stats_doubles(s: &PipelineStats) -> [f64; STATS_SIZE] {
     let c = &s.counters;

@@ -12,7 +12,7 @@ use crate::frames::{PlaneLayout, array_len, copy_plane, direct};
 use crate::layout::{
     NO_POSE, REFERENCE_STRIDE, cloud_floats, pose_doubles, pose_matrix, stats_doubles,
 };
-use crate::layout::{TRAJECTORY_WINDOW, poses_doubles};
+use crate::layout::{POSE_STRIDE, TRAJECTORY_WINDOW};
 use crate::tracker::{REGISTRY, init, lock, tracker};
 
 /// Declares the native methods once: each entry becomes a `native_method!` constant
@@ -303,6 +303,60 @@ fn doubles<'local>(env: &mut Env<'local>, v: &[f64]) -> Result<JDoubleArray<'loc
     Ok(a)
 }
 
+/// Poses copied per step into a trajectory array.
+const TRAJECTORY_CHUNK: usize = 1024;
+
+/// The kept poses from index `from` on (from the window's start if `None`), 8 doubles
+/// each, copied `TRAJECTORY_CHUNK` at a time: a call never allocates the whole window
+/// natively, only the Java array. Asking from before the window is an
+/// `IllegalArgumentException`. Without `from`, a window that moves on during the copy
+/// (the tracker tracked a frame meanwhile) starts the copy again from its new start.
+fn trajectory_array<'local>(
+    env: &mut Env<'local>,
+    pipeline: &ecvo_pipeline::Pipeline,
+    from: Option<u64>,
+) -> Result<JDoubleArray<'local>, Failure> {
+    let mut records = Vec::with_capacity(TRAJECTORY_CHUNK);
+    let mut values = Vec::with_capacity(TRAJECTORY_CHUNK * POSE_STRIDE);
+    for _attempt in 0..16 {
+        let (start, end) = pipeline.trajectory_chunk(u64::MAX, 0, &mut records);
+        let first = from.unwrap_or(start);
+        if first < start {
+            return Err(bad(format!(
+                "from: poses before index {start} were discarded (a session keeps the last {TRAJECTORY_WINDOW}); ask from {start} on"
+            )));
+        }
+        let n =
+            usize::try_from(end.saturating_sub(first)).map_err(|_| bad("trajectory too long"))?;
+        let array = env.new_double_array(n * POSE_STRIDE)?;
+        let mut done = 0usize;
+        let mut moved = false;
+        while done < n {
+            let at = first + done as u64;
+            let (now_start, _) =
+                pipeline.trajectory_chunk(at, TRAJECTORY_CHUNK.min(n - done), &mut records);
+            if now_start > at || records.is_empty() {
+                moved = true;
+                break;
+            }
+            values.clear();
+            values.extend(records.iter().flat_map(pose_doubles));
+            let offset =
+                i32::try_from(done * POSE_STRIDE).map_err(|_| bad("trajectory too long"))?;
+            array.set_region(env, offset, &values)?;
+            done += records.len();
+        }
+        if !moved {
+            return Ok(array);
+        }
+        // The poses from `first` on are partly gone: asked for by index, say so (the
+        // next check above does); from the window's start, copy again.
+    }
+    Err(Failure::IllegalState(
+        "the trajectory window kept moving on during the copy; call again".into(),
+    ))
+}
+
 fn native_trajectory<'local>(
     env: &mut Env<'local>,
     _class: JClass<'local>,
@@ -310,13 +364,7 @@ fn native_trajectory<'local>(
 ) -> jni::errors::Result<JDoubleArray<'local>> {
     run(env, |env| {
         let t = tracker(handle)?;
-        let v: Vec<f64> = t
-            .pipeline
-            .trajectory()
-            .iter()
-            .flat_map(pose_doubles)
-            .collect();
-        doubles(env, &v)
+        trajectory_array(env, &t.pipeline, None)
     })
 }
 
@@ -329,18 +377,7 @@ fn native_trajectory_since<'local>(
     run(env, |env| {
         let t = tracker(handle)?;
         let from = u64::try_from(from).map_err(|_| bad(format!("from: {from} is negative")))?;
-        let poses = t.pipeline.trajectory_since(from);
-        // With the window full, poses before its start are gone: say so rather than
-        // return poses that do not start at `from`.
-        if let Some(first) = poses.first()
-            && first.index > from
-        {
-            return Err(bad(format!(
-                "from: poses before index {} were discarded (a session keeps the last {TRAJECTORY_WINDOW}); ask from {} on",
-                first.index, first.index
-            )));
-        }
-        doubles(env, &poses_doubles(&poses))
+        trajectory_array(env, &t.pipeline, Some(from))
     })
 }
 

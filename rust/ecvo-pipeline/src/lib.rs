@@ -523,6 +523,14 @@ impl Pipeline {
         lock(&self.shared.poses).poses_since(from)
     }
 
+    /// Copies at most `max` of the kept poses with `index >= from` into `out` (cleared
+    /// first) and returns the index of the first kept pose and the index after the
+    /// last: a caller can copy a long trajectory a chunk at a time, never holding the
+    /// lock long and never allocating the whole window.
+    pub fn trajectory_chunk(&self, from: u64, max: usize, out: &mut Vec<PoseRecord>) -> (u64, u64) {
+        lock(&self.shared.poses).chunk(from, max, out)
+    }
+
     /// The index of the first pose still kept: 0 unless a
     /// [`PipelineOptions::trajectory_window`] has overflowed.
     pub fn trajectory_start(&self) -> u64 {

@@ -71,6 +71,19 @@ impl PoseLog {
         self.poses.range(skip..).copied().collect()
     }
 
+    /// Clears `out` and copies into it at most `max` kept poses with `index >= from`;
+    /// returns the index of the first kept pose and the index after the last.
+    pub(crate) fn chunk(&self, from: u64, max: usize, out: &mut Vec<PoseRecord>) -> (u64, u64) {
+        out.clear();
+        let end = self.start + self.poses.len() as u64;
+        let skip = usize::try_from(from.saturating_sub(self.start)).unwrap_or(usize::MAX);
+        if skip < self.poses.len() {
+            let stop = skip.saturating_add(max).min(self.poses.len());
+            out.extend(self.poses.range(skip..stop).copied());
+        }
+        (self.start, end)
+    }
+
     /// The kept reference records, in order.
     pub(crate) fn references(&self) -> Vec<PoseRecord> {
         self.references.iter().copied().collect()
@@ -138,6 +151,14 @@ mod tests {
         assert_eq!(indices(&log.poses_since(3)), (22..30).collect::<Vec<_>>());
         assert_eq!(indices(&log.poses_since(27)), vec![27, 28, 29]);
         assert!(log.poses_since(30).is_empty());
+        // Chunks: the same records, a few at a time, and the window's bounds.
+        let mut out = Vec::new();
+        assert_eq!(log.chunk(0, 3, &mut out), (22, 30));
+        assert_eq!(indices(&out), vec![22, 23, 24]);
+        assert_eq!(log.chunk(28, 3, &mut out), (22, 30));
+        assert_eq!(indices(&out), vec![28, 29]);
+        assert_eq!(log.chunk(30, 3, &mut out), (22, 30));
+        assert!(out.is_empty());
     }
 
     #[test]
