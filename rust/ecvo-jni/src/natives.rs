@@ -303,6 +303,9 @@ fn doubles<'local>(env: &mut Env<'local>, v: &[f64]) -> Result<JDoubleArray<'loc
     Ok(a)
 }
 
+/// Cloud points copied per step into a point-cloud array.
+const CLOUD_CHUNK: usize = 4096;
+
 /// Poses copied per step into a trajectory array.
 const TRAJECTORY_CHUNK: usize = 1024;
 
@@ -419,9 +422,22 @@ fn native_point_cloud<'local>(
         let t = tracker(handle)?;
         let max = usize::try_from(max_points)
             .map_err(|_| bad(format!("maxPoints: {max_points} is negative")))?;
-        let v = cloud_floats(&t.pipeline.cloud_sample(max), max);
-        let a = env.new_float_array(v.len())?;
-        a.set_region(env, 0, &v)?;
+        // A part at a time: a whole 500,000-point cloud copied natively at once is
+        // tens of MB that the C allocator may keep.
+        let n = t.pipeline.cloud_len();
+        let take = n.min(max);
+        let a = env.new_float_array(take * 4)?;
+        let mut part = Vec::with_capacity(CLOUD_CHUNK);
+        let mut done = 0;
+        while done < take {
+            part.clear();
+            let end = (done + CLOUD_CHUNK).min(take);
+            t.pipeline.cloud_sample_part(n, take, done..end, &mut part);
+            let v = cloud_floats(&part, part.len());
+            let offset = i32::try_from(done * 4).map_err(|_| bad("cloud too large"))?;
+            a.set_region(env, offset, &v)?;
+            done = end;
+        }
         Ok(a)
     })
 }

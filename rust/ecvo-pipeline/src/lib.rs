@@ -556,16 +556,38 @@ impl Pipeline {
     /// `n` for `k` taken), copied under the cloud's lock: a viewer asking for a few
     /// thousand points copies those, not the whole cloud.
     pub fn cloud_sample(&self, max_points: usize) -> Vec<CloudPoint> {
-        match &self.shared.cloud {
-            Some(c) => {
-                let c = lock(c);
-                let n = c.points.len();
-                let take = n.min(max_points);
-                (0..take)
-                    .map(|i| c.points[if take == n { i } else { i * n / take }])
-                    .collect()
+        let n = self.cloud_len();
+        let take = n.min(max_points);
+        let mut out = Vec::with_capacity(take);
+        self.cloud_sample_part(n, take, 0..take, &mut out);
+        out
+    }
+
+    /// Points in the cloud now (0 without geometry).
+    pub fn cloud_len(&self) -> usize {
+        self.shared
+            .cloud
+            .as_ref()
+            .map_or(0, |c| lock(c).points.len())
+    }
+
+    /// Part `range` of the sample of `take` points of the first `n` (point `i * n /
+    /// take`, as [`Pipeline::cloud_sample`]) appended to `out`, so that a large sample
+    /// can be copied a part at a time; `n` is a size the cloud had (it only grows).
+    pub fn cloud_sample_part(
+        &self,
+        n: usize,
+        take: usize,
+        range: std::ops::Range<usize>,
+        out: &mut Vec<CloudPoint>,
+    ) {
+        if let Some(c) = &self.shared.cloud {
+            let c = lock(c);
+            let n = n.min(c.points.len());
+            let take = take.min(n);
+            for i in range.start..range.end.min(take) {
+                out.push(c.points[if take == n { i } else { i * n / take }]);
             }
-            None => Vec::new(),
         }
     }
 
