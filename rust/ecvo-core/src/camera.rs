@@ -26,6 +26,22 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// Checks that `self` can replace `old` mid-stream: valid, and the same image size
+    /// (new intrinsics, such as a zoom; another size needs a new tracker).
+    pub fn validate_change_from(&self, old: &Camera) -> Result<()> {
+        self.validate()?;
+        if (self.width, self.height) != (old.width, old.height) {
+            return Err(Error::InvalidConfig {
+                field: "width/height",
+                why: format!(
+                    "{}x{} differs from the stream's {}x{}; a new image size needs a new tracker",
+                    self.width, self.height, old.width, old.height
+                ),
+            });
+        }
+        Ok(())
+    }
+
     /// Checks that every field is finite and usable; the error names the field.
     pub fn validate(&self) -> Result<()> {
         let bad = |field: &'static str, why: String| Err(Error::InvalidConfig { field, why });

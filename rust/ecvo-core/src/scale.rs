@@ -215,21 +215,27 @@ pub fn initial_scale<R: Pair>(chunks: &[Vec<R>], weighting: Weighting) -> Option
 pub fn moments<R: Pair>(chunk: &[R], weighting: Weighting) -> PassSums {
     let mut acc = [0.0f64; 4];
     for r in chunk {
-        let (ri, rz) = (r.ri() as f64, r.rz() as f64);
-        if rz.is_finite() {
-            if weighting == Weighting::Scalar {
-                acc[0] += 0.5 * (ri * ri + rz * rz);
-                acc[2] += 0.5 * (ri * ri + rz * rz);
-            } else {
-                acc[0] += ri * ri;
-                acc[1] += ri * rz;
-                acc[2] += rz * rz;
-            }
-        } else {
-            acc[3] += ri * ri;
-        }
+        add_moments(&mut acc, r.ri(), r.rz(), weighting);
     }
     acc
+}
+
+/// Adds one residual pair's plain second moments to `acc` (see [`moments`]).
+#[inline]
+pub fn add_moments(acc: &mut PassSums, ri: f32, rz: f32, weighting: Weighting) {
+    let (ri, rz) = (ri as f64, rz as f64);
+    if rz.is_finite() {
+        if weighting == Weighting::Scalar {
+            acc[0] += 0.5 * (ri * ri + rz * rz);
+            acc[2] += 0.5 * (ri * ri + rz * rz);
+        } else {
+            acc[0] += ri * ri;
+            acc[1] += ri * rz;
+            acc[2] += rz * rz;
+        }
+    } else {
+        acc[3] += ri * ri;
+    }
 }
 
 /// True when the fixed point has settled: every entry of Σ moved by less than 0.1 %

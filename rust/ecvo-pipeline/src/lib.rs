@@ -426,18 +426,8 @@ impl Pipeline {
     /// The pipeline cannot see a zoom it is not told about: frames of a zoomed lens
     /// read as a camera moving along its axis.
     pub fn set_intrinsics(&self, camera: Camera) -> Result<()> {
-        camera.validate()?;
         let s = &*self.shared;
-        if (camera.width, camera.height) != (s.camera.width, s.camera.height) {
-            return Err(ecvo_core::Error::InvalidConfig {
-                field: "width/height",
-                why: format!(
-                    "{}x{} differs from the stream's {}x{}; a new image size needs a new pipeline",
-                    camera.width, camera.height, s.camera.width, s.camera.height
-                ),
-            }
-            .into());
-        }
+        camera.validate_change_from(&s.camera)?;
         let mut last = lock(&s.last_input);
         if last.camera != camera {
             last.camera = camera;

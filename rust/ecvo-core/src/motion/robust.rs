@@ -142,19 +142,7 @@ fn cost_kernel(ri: &[f32], rz: &[f32], wh: &Whitener) -> f64 {
 pub(super) fn moments(c: &Chunk, weighting: Weighting) -> PassSums {
     let mut acc = [0.0f64; 4];
     for (&ri, &rz) in c.ri[..c.n].iter().zip(&c.rz[..c.n]) {
-        let (ri, rz) = (ri as f64, rz as f64);
-        if rz.is_finite() {
-            if weighting == Weighting::Scalar {
-                acc[0] += 0.5 * (ri * ri + rz * rz);
-                acc[2] += 0.5 * (ri * ri + rz * rz);
-            } else {
-                acc[0] += ri * ri;
-                acc[1] += ri * rz;
-                acc[2] += rz * rz;
-            }
-        } else {
-            acc[3] += ri * ri;
-        }
+        crate::scale::add_moments(&mut acc, ri, rz, weighting);
     }
     acc
 }

@@ -239,12 +239,7 @@ impl Preparer {
             None => Vec::new(),
         };
         let c = config.camera;
-        let (ifx, ify, cx, cy) = (
-            1.0 / c.fx as f32,
-            1.0 / c.fy as f32,
-            c.cx as f32,
-            c.cy as f32,
-        );
+        let (ray_x, ray_y) = rays(&c);
         Preparer {
             camera: c,
             filter: config.filter,
@@ -253,8 +248,8 @@ impl Preparer {
             padded_depth: Vec::new(),
             smoothed: Vec::new(),
             spatial,
-            ray_x: (0..c.width).map(|x| (x as f32 - cx) * ifx).collect(),
-            ray_y: (0..c.height).map(|y| (y as f32 - cy) * ify).collect(),
+            ray_x,
+            ray_y,
             normal_drop: Vec::new(),
             contour_seed: Vec::new(),
             mask_rows: Vec::new(),
@@ -274,28 +269,8 @@ impl Preparer {
     /// prepared after it. Fails (and changes nothing) on invalid intrinsics or
     /// another image size.
     pub fn set_intrinsics(&mut self, camera: Camera) -> Result<()> {
-        camera.validate()?;
-        if (camera.width, camera.height) != (self.camera.width, self.camera.height) {
-            return Err(crate::Error::InvalidConfig {
-                field: "width/height",
-                why: format!(
-                    "{}x{} differs from the stream's {}x{}; a new image size needs a new tracker",
-                    camera.width, camera.height, self.camera.width, self.camera.height
-                ),
-            });
-        }
-        let (ifx, ify, cx, cy) = (
-            1.0 / camera.fx as f32,
-            1.0 / camera.fy as f32,
-            camera.cx as f32,
-            camera.cy as f32,
-        );
-        for (x, r) in self.ray_x.iter_mut().enumerate() {
-            *r = (x as f32 - cx) * ifx;
-        }
-        for (y, r) in self.ray_y.iter_mut().enumerate() {
-            *r = (y as f32 - cy) * ify;
-        }
+        camera.validate_change_from(&self.camera)?;
+        (self.ray_x, self.ray_y) = rays(&camera);
         self.camera = camera;
         Ok(())
     }
@@ -397,6 +372,20 @@ impl Preparer {
         }
         Ok(())
     }
+}
+
+/// `(x - cx) / fx` per column and `(y - cy) / fy` per row of `c`.
+fn rays(c: &Camera) -> (Vec<f32>, Vec<f32>) {
+    let (ifx, ify, cx, cy) = (
+        1.0 / c.fx as f32,
+        1.0 / c.fy as f32,
+        c.cx as f32,
+        c.cy as f32,
+    );
+    (
+        (0..c.width).map(|x| (x as f32 - cx) * ifx).collect(),
+        (0..c.height).map(|y| (y as f32 - cy) * ify).collect(),
+    )
 }
 
 /// The intrinsics of every pyramid level of `config`, full resolution first.
