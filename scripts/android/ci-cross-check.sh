@@ -4,7 +4,7 @@
 #   2. cargo clippy -p ecvo-jni -D warnings for aarch64/armv7/x86_64-linux-android
 #   3. build libecvo_jni.so with scripts/build-android.sh for every ABI (stand-in NDK)
 #   4. check-so.sh on each .so against the app's Kotlin `external fun` declarations
-#   5. ecvo-core's numeric tests (unit, motion, basin, properties) on aarch64 under qemu-user
+#   5. ecvo-core's numeric tests (unit, motion, properties; see step 5) on aarch64 under qemu-user
 #   6. (--selftest) selftest.sh: check-so.sh must reject deliberately bad libraries
 # Every step is timed; the times are printed at the end (also on failure).
 #
@@ -97,11 +97,13 @@ done
 
 # 5. qemu -------------------------------------------------------------------------------
 if [ $QEMU = 1 ]; then
-  # The numeric tests: unit tests, MOTION, the basin and the property tests (about 2 min
-  # under qemu). tests/tracker.rs and tests/threads.rs exercise the same arithmetic through
-  # whole streams and run on the host only: under qemu they took 13 and 4.5 minutes.
+  # The numeric tests: unit tests (among them the NEON/scalar agreement of MOTION's and
+  # the preparation's kernels), MOTION and the property tests. Host only, to keep CI
+  # short: tests/basin.rs (95 s under qemu), the unit test on recorded frames (the same
+  # agreement on real images, its 640x480 pairs the slowest part of --lib under qemu),
+  # and tests/tracker.rs and tests/threads.rs (whole streams: 13 and 4.5 minutes).
   timed "ecvo-core tests on aarch64 (qemu-user)" "$HERE/test-core-aarch64.sh" --release \
-    --lib --test motion --test basin --test properties
+    --lib --test motion --test properties -- --skip poses_on_recorded_frames_match
 else
   warn "*** ecvo-core's aarch64 tests NOT run (--skip-qemu-tests) ***"
 fi

@@ -319,8 +319,9 @@ fn trajectory_array<'local>(
     pipeline: &ecvo_pipeline::Pipeline,
     from: Option<u64>,
 ) -> Result<JDoubleArray<'local>, Failure> {
-    let mut records = Vec::with_capacity(TRAJECTORY_CHUNK);
-    let mut values = Vec::with_capacity(TRAJECTORY_CHUNK * POSE_STRIDE);
+    // Sized on the first chunk: a poll that finds nothing new allocates nothing.
+    let mut records = Vec::new();
+    let mut values = Vec::new();
     for _attempt in 0..16 {
         let (start, end) = pipeline.trajectory_chunk(u64::MAX, 0, &mut records);
         let first = from.unwrap_or(start);
@@ -332,6 +333,8 @@ fn trajectory_array<'local>(
         let n =
             usize::try_from(end.saturating_sub(first)).map_err(|_| bad("trajectory too long"))?;
         let array = env.new_double_array(n * POSE_STRIDE)?;
+        records.reserve(TRAJECTORY_CHUNK.min(n));
+        values.reserve(TRAJECTORY_CHUNK.min(n) * POSE_STRIDE);
         let mut done = 0usize;
         let mut moved = false;
         while done < n {
