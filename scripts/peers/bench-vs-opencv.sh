@@ -1,0 +1,93 @@
+#!/usr/bin/env bash
+# ecvo's time per frame against OpenCV's RGB-D odometry, measured in the same run, as
+# a ratio (issue 11's check):
+#
+#   scripts/peers/bench-vs-opencv.sh [--rounds 3] [--frame-step 1] SEQ... [-- ECVO RUN ARGS]
+#
+# For every sequence and round, alternating: `ecvo run SEQ --threads 1` (ecvo's CPU
+# per frame: the medians of its filter and tracker stages from summary.json, which
+# cover preparation and every MOTION call; reading the PNGs and the point cloud are
+# not counted), then OpenCV's RGB-D odometry through peers.py (`--peers opencv-rgbd`:
+# the median CPU time of making the OdometryFrame, prepareFrame and compute, one
+# thread; decoding not counted). Prints one row per round and, per sequence, the
+# median, min and max of the per-round ratio OpenCV / ecvo. Writes DIR/bench.json
+# (default DIR target/bench-vs-opencv). Same set-up as run-peers.sh (venv, ECVO).
+set -euo pipefail
+
+root=$(cd "$(dirname "$0")/../.." && pwd)
+venv=${PEERS_VENV:-$root/target/peers-venv}
+ecvo=${ECVO:-$root/target/release/ecvo}
+out=$root/target/bench-vs-opencv
+rounds=3
+step=1
+seqs=()
+extra=()
+while [[ $# -gt 0 ]]; do
+    case $1 in
+        --rounds) rounds=$2; shift 2 ;;
+        --frame-step) step=$2; shift 2 ;;
+        --out) out=$2; shift 2 ;;
+        --) shift; extra=("$@"); break ;;
+        -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
+        -*) echo "unknown option $1" >&2; exit 2 ;;
+        *) seqs+=("$1"); shift ;;
+    esac
+done
+if [[ ${#seqs[@]} -eq 0 ]]; then
+    echo "usage: $0 [--rounds N] [--frame-step N] [--out DIR] SEQ... [-- ECVO RUN ARGS]" >&2
+    exit 2
+fi
+[[ $rounds =~ ^[1-9][0-9]*$ ]] || { echo "--rounds: a positive integer, got '$rounds'" >&2; exit 2; }
+
+if [[ ! -x $venv/bin/python ]] || ! "$venv/bin/python" -c 'import cv2, numpy' 2>/dev/null; then
+    echo "setting up $venv (opencv-contrib-python, numpy)" >&2
+    python3 -m venv "$venv"
+    "$venv/bin/pip" install --quiet opencv-contrib-python numpy >&2
+fi
+if [[ ! -x $ecvo ]]; then
+    (cd "$root" && cargo build --release -p ecvo-cli >&2)
+fi
+
+mkdir -p "$out"
+results=$out/rounds.tsv
+: > "$results"
+for seq in "${seqs[@]}"; do
+    seq=${seq%/}
+    name=$(basename "$seq")
+    for r in $(seq 1 "$rounds"); do
+        dir=$out/$name/round$r
+        mkdir -p "$dir"
+        "$ecvo" run "$seq" --threads 1 --frame-step "$step" --out "$dir/ecvo" "${extra[@]}" \
+            > "$dir/ecvo.log" 2>&1 || { echo "ecvo run failed: $dir/ecvo.log" >&2; exit 1; }
+        "$venv/bin/python" "$root/scripts/peers/peers.py" --ecvo "$ecvo" --peers opencv-rgbd \
+            --frame-steps "$step" --out "$dir/opencv" "$seq" > "$dir/opencv.log" 2>&1 \
+            || { echo "peers.py failed: $dir/opencv.log" >&2; exit 1; }
+        "$venv/bin/python" - "$dir" "$name" "$r" >> "$results" <<'EOF'
+import json, sys
+d, name, r = sys.argv[1:]
+s = json.load(open(f"{d}/ecvo/summary.json"))["ms_per_frame"]
+e = s["filter"]["median"] + s["tracker"]["median"]
+o = json.load(open(f"{d}/opencv/peers.json"))["rows"][0]["ms_per_frame_median"]
+print(f"{name}\t{r}\t{e:.3f}\t{o:.3f}\t{o / e:.3f}")
+EOF
+        tail -1 "$results" | awk -F'\t' '{printf "%s round %s: ecvo %.2f ms/frame, OpenCV RGB-D %.2f ms/frame, ratio %.2f\n", $1, $2, $3, $4, $5}'
+    done
+done
+
+"$venv/bin/python" - "$results" "$out/bench.json" <<'EOF'
+import json, statistics, sys
+rows = [l.rstrip("\n").split("\t") for l in open(sys.argv[1]) if l.strip()]
+by = {}
+for name, r, e, o, q in rows:
+    by.setdefault(name, []).append((float(e), float(o), float(q)))
+print("\n| sequence | rounds | ecvo ms/frame, median (min-max) | OpenCV RGB-D ms/frame | OpenCV / ecvo, median (min-max) |")
+print("|---|---|---|---|---|")
+out = {}
+for name, v in by.items():
+    e, o, q = zip(*v)
+    f = lambda x: f"{statistics.median(x):.2f} ({min(x):.2f}-{max(x):.2f})"
+    print(f"| {name} | {len(v)} | {f(e)} | {f(o)} | **{f(q)}** |")
+    out[name] = {"ecvo_ms": e, "opencv_ms": o, "ratio": q,
+                 "ratio_median": statistics.median(q)}
+json.dump(out, open(sys.argv[2], "w"), indent=2)
+EOF
