@@ -146,9 +146,13 @@ def main():
     if crops:
         d_img = next(c for c in crops if c[1][4] == 16)[1]
         g_img = next(c for c in crops if c[1][4] == 8)[1]
-        for k, (w, h) in enumerate([(16, 12), (24, 16), (40, 30)]):
+        # (72x64 goes down the whole default pyramid, 3 levels.)
+        for k, (w, h) in enumerate([(16, 12), (24, 16), (40, 30), (72, 64)]):
             head = bytes([w - 8, h - 8]) + struct.pack("<IIIII", 0xA0000000, 0xA0000000, 0x90000000, 0x90000000, 0x00100000)
             head += bytes([k % 2, k % 3, 150])
+            # schedule (paper, pyramid, pyramid-stride2), bivariate weighting, a scalar
+            # finest step or not, depth noise constant or quadratic
+            head += bytes([(k + 2) % 3, 1, k % 2]) + (bytes([0]) if k % 2 else b"") + bytes([k % 2])
             body = b""
             for shift in (0, 1):
                 body += struct.pack("<HH", 1000, 1)

@@ -9,7 +9,8 @@
 //! x86_64 (SSE2, and its AVX2 copies) and aarch64 (NEON). FMA is never used.
 //!
 //! [`V`] is two 4-lane vectors written with the target's intrinsics (SSE2 on x86_64,
-//! NEON on aarch64; both in the baseline of their targets), an array elsewhere. Plain
+//! NEON on aarch64; both in the baseline of their targets), an array elsewhere (or
+//! with `--cfg ecvo_portable_lanes`). Plain
 //! arrays were tried first: the compiler vectorised the arithmetic but kept the
 //! loop-carried sums as scalars and rebuilt vectors from them every block.
 
@@ -22,7 +23,7 @@ pub(super) use imp::{
     M, V, W, acc, add, div, finite, flush, load, mul, neg, select, splat, sub, sum,
 };
 
-#[cfg(target_arch = "x86_64")]
+#[cfg(all(target_arch = "x86_64", not(ecvo_portable_lanes)))]
 #[allow(unused_unsafe)]
 mod imp {
     //! SSE2 (baseline on x86_64). The intrinsics used are safe to call where SSE2 is
@@ -153,7 +154,7 @@ mod imp {
     }
 }
 
-#[cfg(target_arch = "aarch64")]
+#[cfg(all(target_arch = "aarch64", not(ecvo_portable_lanes)))]
 #[allow(unused_unsafe)]
 mod imp {
     //! NEON (baseline on aarch64). The intrinsics used are safe to call where NEON is
@@ -276,9 +277,13 @@ mod imp {
     }
 }
 
-#[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+#[cfg(any(
+    ecvo_portable_lanes,
+    not(any(target_arch = "x86_64", target_arch = "aarch64"))
+))]
 mod imp {
-    //! Plain arrays elsewhere.
+    //! Plain arrays elsewhere, and everywhere with `--cfg ecvo_portable_lanes` (to
+    //! measure the intrinsics against them).
 
     /// Eight `f32` lanes.
     pub(in super::super) type V = [f32; 8];
