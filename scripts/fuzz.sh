@@ -7,12 +7,16 @@
 # Needs the nightly toolchain and cargo-fuzz (`rustup toolchain install nightly`,
 # `cargo install cargo-fuzz`). Seeds: scripts/fuzz/seeds.py (testdata/ and, when
 # present, ../shared/datasets). Crashes land in fuzz/artifacts/TARGET/; the exit
-# status is non-zero if any target found one. Summary: fuzz/results.md.
+# status is non-zero if any target found one. Summary: fuzz/results.md (for a subset of
+# targets: fuzz/artifacts/results-TARGETS.md).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 secs=${1:-600}
 shift || true
 targets=("$@")
+out=fuzz/results.md
+# A run of some targets only writes its own table, not over the summary of all of them.
+[ ${#targets[@]} -gt 0 ] && out="fuzz/artifacts/results-$(IFS=-; echo "${targets[*]}").md"
 [ ${#targets[@]} -eq 0 ] && targets=(io_png io_text levels prepare_motion jni_args depth16)
 
 declare -A max_len=([io_png]=16384 [io_text]=4096 [levels]=256 [prepare_motion]=40000 [jni_args]=256 [depth16]=86402)
@@ -20,7 +24,7 @@ declare -A max_len=([io_png]=16384 [io_text]=4096 [levels]=256 [prepare_motion]=
 [ -d fuzz/corpus ] || python3 scripts/fuzz/seeds.py
 nice -n 19 cargo +nightly fuzz build || exit 1
 
-out=fuzz/results.md
+mkdir -p fuzz/artifacts
 {
   echo "| target | seconds | executions | exec/s | corpus | coverage | result |"
   echo "|---|---|---|---|---|---|---|"
