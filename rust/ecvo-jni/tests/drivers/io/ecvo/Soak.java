@@ -39,7 +39,7 @@ public final class Soak {
 
         Pusher pusher = new Pusher(f, handle, frames, rate, report, warmupArg);
         System.out.println("frames\tseconds\tRSS_MB\theap_MB\tthreads\tfds\ttracked\tdropped\tlost\treanchors\ttrajectory\tcloud\tjit_ms");
-        for (long k = 0; k < frames; k++) pusher.push(k);
+        pusher.pushAll();
         long[] pushNs = pusher.pushNs;
         long start = pusher.start, warmup = pusher.warmup, rssWarm = pusher.rssWarm, heapWarm = pusher.heapWarm;
         long cloudWarm = pusher.cloudWarm, trackedWarm = pusher.trackedWarm, cloudEnd = pusher.cloudEnd;
@@ -157,9 +157,10 @@ public final class Soak {
 
     /**
      * The push loop's body and its reports, in small methods: the JVM compiles them
-     * during warm-up. (With the whole loop inside main, HotSpot compiled main on stack
-     * after about 60,000 iterations; that compilation's arena, freed afterwards, stayed
-     * in glibc's heap as a 1.5-3.6 MB RSS step that was the driver's, not ecvo's.)
+     * during warm-up, and the loop is not in main. (With the loop inside main, HotSpot
+     * compiled the whole of main on stack after about 60,000 iterations, its back-edge
+     * threshold; that compilation's arena, freed afterwards, stayed in glibc's heap as
+     * a 1.5-3.6 MB RSS step that was the driver's, not ecvo's.)
      */
     private static final class Pusher {
         final Frames f;
@@ -177,6 +178,11 @@ public final class Soak {
             this.f = f; this.handle = handle; this.frames = frames; this.rate = rate;
             this.report = report; this.warmupArg = warmupArg;
             this.pushNs = new long[(int) frames];
+        }
+
+        /** The loop itself in a small method: its on-stack compilation is cheap. */
+        void pushAll() throws InterruptedException {
+            for (long k = 0; k < frames; k++) push(k);
         }
 
         void push(long k) throws InterruptedException {
