@@ -772,6 +772,40 @@ mod tests {
     }
 
     #[test]
+    fn point_budgets_parse_apply_and_validate() {
+        let steps = parse_schedule("3/1/20,1/1/10/4096,0/2/8/2048").unwrap();
+        assert_eq!(
+            steps.iter().map(|l| l.max_points).collect::<Vec<_>>(),
+            vec![None, Some(4096), Some(2048)]
+        );
+        assert!(parse_schedule("0/2/8/x").is_err() && parse_schedule("0/2/8/1/1").is_err());
+        assert_eq!(
+            parse_point_budget(" 1=4096, 0=all").unwrap(),
+            vec![(1, Some(4096)), (0, None)]
+        );
+        assert!(parse_point_budget("none").unwrap().is_empty());
+        for bad in ["1", "1=", "x=5", "1=-3"] {
+            assert!(parse_point_budget(bad).is_err(), "{bad:?} parsed");
+        }
+        let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+        c.motion.set_point_budget(0, Some(3000));
+        assert_eq!(c.motion.levels[3].max_points, Some(3000));
+        assert!(c.motion.levels[..3].iter().all(|l| l.max_points.is_none()));
+        assert!(c.validate().is_ok());
+        c.motion.set_point_budget(0, Some(MIN_POINT_BUDGET - 1));
+        assert!(matches!(
+            c.validate(),
+            Err(Error::InvalidConfig {
+                field: "motion.levels.max_points",
+                ..
+            })
+        ));
+        // The paper's schedule samples every pixel it names.
+        let paper = Config::paper(cam(), Preset::Pc, Mode::L2);
+        assert!(paper.motion.levels.iter().all(|l| l.max_points.is_none()));
+    }
+
+    #[test]
     fn levels_parse() {
         let l = parse_levels("30mm:7deg,0.12m:12deg").unwrap();
         assert_eq!(

@@ -11,8 +11,8 @@
 //! textured poster on a flat wall scores by its intensity edges, a blank wall with
 //! depth structure by its depth gradient, and a scene with both keeps the best of
 //! each kind. The points are spread over the image as in DSO: the candidate grid is
-//! cut into square cells of `d x d` candidates, `d ≈ √(candidates / budget)`, and
-//! the best of each cell is taken first; if the cell winners exceed the budget, the
+//! cut into square cells of `d x d` candidates, `d = round(√(candidates / budget))`
+//! (about one cell per point), and the best of each cell is taken first; if the cell winners exceed the budget, the
 //! best-scoring winners are kept, otherwise all winners plus the best of the rest.
 //! "Best" is a threshold found by selection (no sort); points at the threshold are
 //! taken in row-major order until the budget is full, so the choice is
