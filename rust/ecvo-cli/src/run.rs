@@ -82,10 +82,9 @@ impl EngineChoice {
                     .iter()
                     .map(|l| match l.max_points {
                         None => format!("{}/{}/{}", l.pyramid_level, l.stride, l.max_iterations),
-                        Some(n) => format!(
-                            "{}/{}/{}/{n}",
-                            l.pyramid_level, l.stride, l.max_iterations
-                        ),
+                        Some(n) => {
+                            format!("{}/{}/{}/{n}", l.pyramid_level, l.stride, l.max_iterations)
+                        }
                     })
                     .collect::<Vec<_>>()
                     .join(",")

@@ -258,7 +258,9 @@ pub fn parse_point_budget(s: &str) -> Result<Vec<(usize, Option<usize>)>> {
                 None
             } else {
                 Some(n.parse::<usize>().map_err(|_| {
-                    bad(format!("`{pair}`: points `{n}` is not a whole number or all"))
+                    bad(format!(
+                        "`{pair}`: points `{n}` is not a whole number or all"
+                    ))
                 })?)
             };
             Ok((level, points))

@@ -5,22 +5,31 @@
 //! score from both of its gradients, each normalised by its mean over the
 //! candidates so that neither unit dominates:
 //!
-//! `s = max(|∇I|² / mean |∇I|², |∇log Z|² / mean |∇log Z|²)`
+//! `s = min(max(|∇I|² / mean |∇I|², |∇log Z|² / mean |∇log Z|²), SCORE_CAP)`
 //!
 //! (`|∇log Z| = |∇Z| / Z`, missing when a neighbour has no depth, then 0). A
 //! textured poster on a flat wall scores by its intensity edges, a blank wall with
 //! depth structure by its depth gradient, and a scene with both keeps the best of
-//! each kind. The points are spread over the image as in DSO: the candidate grid is
-//! cut into square cells of `d x d` candidates, `d = round(√(candidates / budget))`
-//! (about one cell per point), and the best of each cell is taken first; if the cell winners exceed the budget, the
-//! best-scoring winners are kept, otherwise all winners plus the best of the rest.
-//! "Best" is a threshold found by selection (no sort); points at the threshold are
-//! taken in row-major order until the budget is full, so the choice is
-//! deterministic. The template keeps row-major order. All buffers are reused.
+//! each kind. Above [`SCORE_CAP`] every candidate is as good as any other: picking
+//! the steepest pixel of every edge raised the spread of the residuals (the robust
+//! scale, which MOTION's spread check compares with fixed limits) and lost a frame
+//! of fr1/desk that every-pixel tracking did not lose.
+//!
+//! The points are spread over the image as in DSO: the candidate grid is cut into
+//! square cells of `d x d` candidates, `d = round(√(candidates / budget))` (about
+//! one cell per point), and the best of each cell is taken first; if the cell
+//! winners exceed the budget, the best-scoring winners are kept, otherwise all
+//! winners plus the best of the rest. "Best" is a threshold found by selection (no
+//! sort); the places left at the threshold are spread evenly over the candidates
+//! tied at it in row-major order, so the choice is deterministic and a cap reached
+//! by many does not favour the top of the image. The template keeps row-major order. All buffers are reused.
 //!
 //! [`MotionLevel::max_points`]: crate::config::MotionLevel::max_points
 
 use super::Sample;
+
+/// The highest normalised score: a gradient (squared) of twice the mean or more.
+const SCORE_CAP: f32 = 2.0;
 
 /// Scratch buffers of the selection, reused from frame to frame.
 #[derive(Clone, Debug, Default)]
@@ -113,7 +122,7 @@ impl Selector {
         };
         let (ki, kz) = (inv(sum_i), inv(sum_z));
         for (s, &z) in self.score.iter_mut().zip(&self.depth_score) {
-            *s = (*s * ki).max(z * kz);
+            *s = (*s * ki).max(z * kz).min(SCORE_CAP);
         }
         // The best candidate of each cell (the first in row-major order on a tie).
         self.best.clear();
@@ -155,16 +164,24 @@ impl Selector {
             .iter()
             .filter(|&&s| s.total_cmp(&tau).is_gt())
             .count();
-        let mut at_tau = wanted - above;
+        let ties = self
+            .pool
+            .iter()
+            .filter(|&&s| s.total_cmp(&tau).is_eq())
+            .count();
+        // The `wanted - above` places left go to candidates at the threshold (many
+        // when scores reach the cap), spread evenly over them in row-major order.
+        let places = wanted - above;
+        let mut tie = 0usize;
         for (k, &s) in self.score.iter().enumerate() {
             if self.keep[k] != among {
                 continue;
             }
             let take = match s.total_cmp(&tau) {
                 std::cmp::Ordering::Greater => true,
-                std::cmp::Ordering::Equal if at_tau > 0 => {
-                    at_tau -= 1;
-                    true
+                std::cmp::Ordering::Equal => {
+                    tie += 1;
+                    tie * places / ties > (tie - 1) * places / ties
                 }
                 _ => false,
             };
