@@ -36,7 +36,7 @@ const SCORE_CAP: f32 = 2.0;
 pub(crate) struct Selector {
     /// Pixel index of each candidate, row-major.
     pixel: Vec<u32>,
-    /// Cell of each candidate.
+    /// Grid column and row of each candidate (packed), then its cell.
     cell: Vec<u32>,
     /// `|∇I|²` then the combined score of each candidate.
     score: Vec<f32>,
@@ -69,34 +69,16 @@ impl Selector {
         self.score.clear();
         self.depth_score.clear();
         self.cell.clear();
-        let gw = (start..w.saturating_sub(1)).step_by(stride).len();
-        let gh = (start..h.saturating_sub(1)).step_by(stride).len();
-        // Cell side in candidates: about `budget` cells over the valid candidates,
-        // counted first so that holes in the depth do not leave the budget unused.
-        let mut n = 0usize;
-        for y in (start..h.saturating_sub(1)).step_by(stride) {
-            for x in (start..w.saturating_sub(1)).step_by(stride) {
-                n += samples[y * w + x][super::D].is_finite() as usize;
-            }
-        }
-        if n <= budget {
-            for y in (start..h.saturating_sub(1)).step_by(stride) {
-                for x in (start..w.saturating_sub(1)).step_by(stride) {
-                    if samples[y * w + x][super::D].is_finite() {
-                        emit(y * w + x);
-                    }
-                }
-            }
-            return;
-        }
-        let d = ((n as f64 / budget.max(1) as f64).sqrt().round() as usize).max(1);
-        let cells_x = gw.div_ceil(d);
-        let cells = cells_x * gh.div_ceil(d);
+        // One pass over the candidates: where they are (grid column and row, packed,
+        // until the cell size is known) and their gradients.
         let (mut sum_i, mut sum_z) = (0.0f64, 0.0f64);
-        for (gy, y) in (start..h - 1).step_by(stride).enumerate() {
-            let row = (gy / d) * cells_x;
+        let (mut gw, mut gh) = (0usize, 0usize);
+        for (gy, y) in (start..h.saturating_sub(1)).step_by(stride).enumerate() {
+            gh = gy + 1;
+            let row = &samples[y * w..(y + 1) * w];
             for (gx, x) in (start..w - 1).step_by(stride).enumerate() {
-                let s = &samples[y * w + x];
+                gw = gx + 1;
+                let s = &row[x];
                 let z = s[super::D];
                 if !z.is_finite() {
                     continue;
@@ -107,10 +89,26 @@ impl Selector {
                 sum_i += gi as f64;
                 sum_z += gz as f64;
                 self.pixel.push((y * w + x) as u32);
-                self.cell.push((row + gx / d) as u32);
+                self.cell.push((gx | gy << 16) as u32);
                 self.score.push(gi);
                 self.depth_score.push(gz);
             }
+        }
+        let n = self.pixel.len();
+        if n <= budget {
+            for &p in &self.pixel {
+                emit(p as usize);
+            }
+            return;
+        }
+        // Cell side in candidates: about `budget` cells over the valid candidates
+        // (counted, so that holes in the depth do not leave the budget unused).
+        let d = ((n as f64 / budget.max(1) as f64).sqrt().round() as usize).max(1);
+        let cells_x = gw.div_ceil(d);
+        let cells = cells_x * gh.div_ceil(d);
+        for c in &mut self.cell {
+            let (gx, gy) = (*c as usize & 0xffff, *c as usize >> 16);
+            *c = ((gy / d) * cells_x + gx / d) as u32;
         }
         // Normalised scores; a gradient that is zero everywhere adds nothing.
         let inv = |sum: f64| {
