@@ -14,9 +14,8 @@
 //! frame on one core, which is what the stages' loops split when they run wider.
 //!
 //! `ECVO_BENCH_SCHEDULE` (as `--schedule`) and `ECVO_BENCH_POINT_BUDGET` (as
-//! `--point-budget`; `1=all,0=all` is every sampled pixel, as before the default
-//! budgets) change the config from the default, to compare schedules with one bench
-//! binary.
+//! `--point-budget`, e.g. `1=4096,0=4096`) change the config from the default, to
+//! compare schedules with one bench binary.
 
 use std::hint::black_box;
 

@@ -114,15 +114,6 @@ pub struct FilterConfig {
 /// The smallest point budget a step may have.
 pub const MIN_POINT_BUDGET: usize = 64;
 
-/// The point budgets of [`Config::new`]'s schedule, `(pyramid level, points)`: the
-/// two finest steps of `pyramid-stride2` keep 2,048 and 8,192 points (about 1 in 9
-/// and 1 in 2.3 of a 320x240 frame's). On the robustness suite (fr1/xyz and fr1/desk
-/// at half size, frame steps 1-4, and 16 synthetic cells) the median ATE was 3.6 %
-/// above every-pixel tracking with no new lost frame, and MOTION 1.6x faster at
-/// 320x240 (5.8x at 640x480, where the cut is deeper and fr1/xyz's ATE rose up to
-/// 18 %).
-pub const DEFAULT_POINT_BUDGETS: [(usize, usize); 2] = [(1, 2048), (0, 8192)];
-
 /// One step of the coarse-to-fine schedule.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MotionLevel {
@@ -401,9 +392,7 @@ pub struct Config {
 }
 
 impl Config {
-    /// The paper's settings for a preset and a mode on the given camera, with ecvo's
-    /// motion estimation: the `pyramid-stride2` schedule with
-    /// [`DEFAULT_POINT_BUDGETS`] at its two finest steps.
+    /// The paper's settings for a preset and a mode on the given camera.
     pub fn new(camera: Camera, preset: Preset, mode: Mode) -> Self {
         let (levels, normal, contour) = match preset {
             Preset::Pc => (
@@ -428,7 +417,7 @@ impl Config {
             Mode::L1 => 1,
             Mode::L2 => 2,
         };
-        let mut config = Config {
+        Config {
             camera,
             filter: FilterConfig {
                 bilateral: Some(BilateralConfig::default()),
@@ -458,11 +447,7 @@ impl Config {
             max_speed_m_s: 4.0,
             min_anchor_depth_fraction: 0.05,
             min_anchor_texture_fraction: 0.02,
-        };
-        for (level, points) in DEFAULT_POINT_BUDGETS {
-            config.motion.set_point_budget(level, Some(points));
         }
-        config
     }
 
     /// The paper's method as written, to reproduce its Table 1: the 8/4/2 sampling of
@@ -805,16 +790,7 @@ mod tests {
             assert!(parse_point_budget(bad).is_err(), "{bad:?} parsed");
         }
         let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
-        assert_eq!(
-            c.motion
-                .levels
-                .iter()
-                .map(|l| l.max_points)
-                .collect::<Vec<_>>(),
-            vec![None, None, Some(2048), Some(8192)]
-        );
         c.motion.set_point_budget(0, Some(3000));
-        c.motion.set_point_budget(1, None);
         assert_eq!(c.motion.levels[3].max_points, Some(3000));
         assert!(c.motion.levels[..3].iter().all(|l| l.max_points.is_none()));
         assert!(c.validate().is_ok());

@@ -52,11 +52,7 @@ fn poses_do_not_depend_on_the_thread_count() {
         ReferenceLevel::mm_deg(30.0, 3.0),
     ];
     // The finest step's template must be big enough for MOTION to split its loops,
-    // or this test would compare the sequential path with itself: every pixel, not
-    // the default point budgets (which keep every step below the split).
-    for l in &mut cfg.motion.levels {
-        l.max_points = None;
-    }
+    // or this test would compare the sequential path with itself.
     let (frame, _) = common::prepared(&seq, 0, &cfg);
     let finest = frame.templates.last().unwrap().points.len();
     assert!(

@@ -52,14 +52,6 @@ fn clipped_reference(
     out
 }
 
-/// `config` without point budgets: the old preparation samples every pixel.
-fn every_pixel(mut config: Config) -> Config {
-    for l in &mut config.motion.levels {
-        l.max_points = None;
-    }
-    config
-}
-
 fn camera(w: usize, h: usize) -> Camera {
     Camera {
         width: w,
@@ -81,7 +73,7 @@ fn blocked_bilateral_equals_the_clipped_filter_bit_for_bit() {
         (64, 9, 3, 0.05),
         (129, 17, 2, 0.35),
     ] {
-        let mut config = every_pixel(Config::new(camera(w, h), Preset::Pc, Mode::L2));
+        let mut config = Config::new(camera(w, h), Preset::Pc, Mode::L2);
         config.filter.bilateral = Some(BilateralConfig {
             radius: r,
             sigma_space_px: 1.5,
@@ -188,16 +180,16 @@ fn fused_passes_equal_the_old_preparation_bit_for_bit() {
         };
         let mut configs = Vec::new();
         for preset in [Preset::Pc, Preset::Phone] {
-            configs.push(every_pixel(Config::new(c, preset, Mode::L2)));
+            configs.push(Config::new(c, preset, Mode::L2));
         }
-        let mut no_filters = every_pixel(Config::new(c, Preset::Pc, Mode::L2));
+        let mut no_filters = Config::new(c, Preset::Pc, Mode::L2);
         no_filters.filter.bilateral = None;
         no_filters.filter.normal_max_angle_deg = None;
         configs.push(no_filters);
-        let mut contour_only = every_pixel(Config::new(c, Preset::Pc, Mode::L2));
+        let mut contour_only = Config::new(c, Preset::Pc, Mode::L2);
         contour_only.filter.normal_max_angle_deg = None;
         configs.push(contour_only);
-        let mut normal_only = every_pixel(Config::new(c, Preset::Phone, Mode::L2));
+        let mut normal_only = Config::new(c, Preset::Phone, Mode::L2);
         normal_only.filter.contour_angle_deg = None;
         configs.push(normal_only);
         for (k, config) in configs.iter().enumerate() {
@@ -248,7 +240,7 @@ fn fused_passes_equal_the_old_preparation_on_small_random_frames() {
             depth_scale: 1000.0,
         };
         for preset in [Preset::Pc, Preset::Phone] {
-            let config = every_pixel(Config::new(c, preset, Mode::L2));
+            let config = Config::new(c, preset, Mode::L2);
             let (mut old, mut new) = (OldPreparer::new(&config), Preparer::new(&config));
             let (mut want, mut got) = (PreparedFrame::default(), PreparedFrame::default());
             for k in 0..6 {
