@@ -163,6 +163,12 @@ struct TrackArgs {
     /// coarsest first, e.g. "3/1/20,2/1/15,1/1/10,0/2/8".
     #[arg(long)]
     schedule: Option<String>,
+    /// Template point budgets per pyramid level, LEVEL=POINTS comma-separated (e.g.
+    /// "1=4096,0=4096"; POINTS `all` for every sampled pixel): the steps on that level
+    /// keep the best-scoring points by intensity and depth gradient, spread over the
+    /// image. Applied after --schedule.
+    #[arg(long)]
+    point_budget: Option<String>,
     /// Residual weighting: scalar (one σ² over r_I and λ r_Z), bivariate (Kerl et
     /// al.'s 2x2 scale matrix), or hybrid (bivariate at the coarse steps, scalar at the
     /// finest).
@@ -218,6 +224,7 @@ impl TrackArgs {
         let engine = EngineChoice {
             paper: self.paper,
             schedule: self.schedule.clone(),
+            point_budget: self.point_budget.clone(),
             weighting: self.weighting.map(|w| match w {
                 WeightingArg::Scalar => (Weighting::Scalar, None),
                 WeightingArg::Bivariate => (Weighting::Bivariate, None),

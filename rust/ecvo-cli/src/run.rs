@@ -53,6 +53,8 @@ pub struct EngineChoice {
     pub paper: bool,
     /// Coarse-to-fine schedule by name.
     pub schedule: Option<String>,
+    /// Template point budgets, `LEVEL=POINTS,...`.
+    pub point_budget: Option<String>,
     /// Residual weighting, and the finest step's if different.
     pub weighting: Option<(ecvo_core::Weighting, Option<ecvo_core::Weighting>)>,
     /// Depth noise model.
@@ -78,7 +80,12 @@ impl EngineChoice {
             || {
                 m.levels
                     .iter()
-                    .map(|l| format!("{}/{}/{}", l.pyramid_level, l.stride, l.max_iterations))
+                    .map(|l| match l.max_points {
+                        None => format!("{}/{}/{}", l.pyramid_level, l.stride, l.max_iterations),
+                        Some(n) => {
+                            format!("{}/{}/{}/{n}", l.pyramid_level, l.stride, l.max_iterations)
+                        }
+                    })
                     .collect::<Vec<_>>()
                     .join(",")
             },
@@ -155,6 +162,13 @@ impl TrackSettings {
         if let Some(name) = &e.schedule {
             config.motion.levels =
                 ecvo_core::parse_schedule(name).with_context(|| format!("--schedule {name}"))?;
+        }
+        if let Some(text) = &e.point_budget {
+            let budgets = ecvo_core::parse_point_budget(text)
+                .with_context(|| format!("--point-budget {text}"))?;
+            for (level, points) in budgets {
+                config.motion.set_point_budget(level, points);
+            }
         }
         if let Some((w, fine)) = e.weighting {
             config.motion.weighting = w;

@@ -12,6 +12,10 @@
 //!
 //! Everything runs inside a one-thread rayon pool: the figures are the cost of a
 //! frame on one core, which is what the stages' loops split when they run wider.
+//!
+//! `ECVO_BENCH_SCHEDULE` (as `--schedule`) and `ECVO_BENCH_POINT_BUDGET` (as
+//! `--point-budget`, e.g. `1=4096,0=4096`) change the config from the default, to
+//! compare schedules with one bench binary.
 
 use std::hint::black_box;
 
@@ -65,7 +69,16 @@ fn view(f: &SynthFrame) -> FrameView<'_> {
 fn frames(cam: SynthCamera) -> (Config, SynthFrame, SynthFrame) {
     let mut seq = SynthSequence::phone_320x180(40, 7);
     seq.camera = cam;
-    let config = Config::new(camera_of(&cam), Preset::Pc, Mode::L2);
+    let mut config = Config::new(camera_of(&cam), Preset::Pc, Mode::L2);
+    if let Ok(s) = std::env::var("ECVO_BENCH_SCHEDULE") {
+        config.motion.levels = ecvo_core::parse_schedule(&s).expect("ECVO_BENCH_SCHEDULE");
+    }
+    if let Ok(s) = std::env::var("ECVO_BENCH_POINT_BUDGET") {
+        for (level, points) in ecvo_core::parse_point_budget(&s).expect("ECVO_BENCH_POINT_BUDGET") {
+            config.motion.set_point_budget(level, points);
+        }
+    }
+    config.validate().expect("a valid bench config");
     (config, seq.frame(20), seq.frame(21))
 }
 

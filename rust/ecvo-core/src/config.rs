@@ -111,6 +111,9 @@ pub struct FilterConfig {
     pub max_depth_m: f64,
 }
 
+/// The smallest point budget a step may have.
+pub const MIN_POINT_BUDGET: usize = 64;
+
 /// One step of the coarse-to-fine schedule.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MotionLevel {
@@ -122,6 +125,10 @@ pub struct MotionLevel {
     pub stride: usize,
     /// At most this many Gauss-Newton iterations at this step.
     pub max_iterations: u32,
+    /// Keep at most this many template points at this step, chosen by their
+    /// intensity and depth gradients and spread over the image
+    /// ([`crate::prepare`]'s selection); `None` keeps every valid sampled pixel.
+    pub max_points: Option<usize>,
 }
 
 /// The coarse-to-fine schedules the engine knows by name.
@@ -147,6 +154,7 @@ impl Schedule {
             pyramid_level,
             stride,
             max_iterations,
+            max_points: None,
         };
         match self {
             Schedule::PaperSampling => vec![l(0, 8, 20), l(0, 4, 15), l(0, 2, 10)],
@@ -183,8 +191,9 @@ impl std::str::FromStr for Schedule {
 }
 
 /// Parses a coarse-to-fine schedule: a name (`paper`, `pyramid`, `pyramid-stride2`), or
-/// steps written `LEVEL/STRIDE/ITERATIONS`, comma-separated, coarsest first (the
-/// default is `3/1/20,2/1/15,1/1/10,0/2/8`). Ranges are checked by [`Config::validate`].
+/// steps written `LEVEL/STRIDE/ITERATIONS` or `LEVEL/STRIDE/ITERATIONS/POINTS` (a
+/// point budget, [`MotionLevel::max_points`]), comma-separated, coarsest first (e.g.
+/// `3/1/20,2/1/15,1/1/10,0/2/8`). Ranges are checked by [`Config::validate`].
 pub fn parse_schedule(s: &str) -> Result<Vec<MotionLevel>> {
     if let Ok(named) = s.parse::<Schedule>() {
         return Ok(named.levels());
@@ -196,10 +205,14 @@ pub fn parse_schedule(s: &str) -> Result<Vec<MotionLevel>> {
     s.split(',')
         .map(|step| {
             let parts: Vec<&str> = step.trim().split('/').collect();
-            let [level, stride, iterations] = parts[..] else {
-                return Err(bad(format!(
-                    "`{step}` is not LEVEL/STRIDE/ITERATIONS (and `{s}` is not paper, pyramid or pyramid-stride2)"
-                )));
+            let (level, stride, iterations, points) = match parts[..] {
+                [l, s, i] => (l, s, i, None),
+                [l, s, i, p] => (l, s, i, Some(p)),
+                _ => {
+                    return Err(bad(format!(
+                        "`{step}` is not LEVEL/STRIDE/ITERATIONS[/POINTS] (and `{s}` is not paper, pyramid or pyramid-stride2)"
+                    )));
+                }
             };
             let num = |t: &str, what: &str| {
                 t.trim()
@@ -210,7 +223,47 @@ pub fn parse_schedule(s: &str) -> Result<Vec<MotionLevel>> {
                 pyramid_level: num(level, "level")? as usize,
                 stride: num(stride, "stride")? as usize,
                 max_iterations: num(iterations, "iterations")?,
+                max_points: match points {
+                    Some(p) => Some(num(p, "points")? as usize),
+                    None => None,
+                },
             })
+        })
+        .collect()
+}
+
+/// Parses per-level point budgets written `LEVEL=POINTS`, comma-separated, e.g.
+/// `1=4096,0=4096`; `POINTS` may be `all` (no budget). `none` or an empty string
+/// gives no entry. Apply them with [`MotionConfig::set_point_budget`].
+pub fn parse_point_budget(s: &str) -> Result<Vec<(usize, Option<usize>)>> {
+    let bad = |why: String| Error::InvalidConfig {
+        field: "point_budget",
+        why,
+    };
+    let s = s.trim();
+    if s.is_empty() || s.eq_ignore_ascii_case("none") {
+        return Ok(Vec::new());
+    }
+    s.split(',')
+        .map(|pair| {
+            let (l, n) = pair
+                .split_once('=')
+                .ok_or_else(|| bad(format!("`{pair}` is not LEVEL=POINTS, e.g. 0=4096")))?;
+            let level = l
+                .trim()
+                .parse::<usize>()
+                .map_err(|_| bad(format!("`{pair}`: level `{l}` is not a whole number")))?;
+            let n = n.trim();
+            let points = if n.eq_ignore_ascii_case("all") {
+                None
+            } else {
+                Some(n.parse::<usize>().map_err(|_| {
+                    bad(format!(
+                        "`{pair}`: points `{n}` is not a whole number or all"
+                    ))
+                })?)
+            };
+            Ok((level, points))
         })
         .collect()
 }
@@ -290,6 +343,17 @@ pub struct MotionConfig {
     /// The same for the depth residuals: `√Σ_ZZ / λ` in metres (at 1 m with the
     /// quadratic noise model).
     pub max_depth_sigma_m: f64,
+}
+
+impl MotionConfig {
+    /// Sets the point budget of every step on pyramid level `pyramid_level`.
+    pub fn set_point_budget(&mut self, pyramid_level: usize, max_points: Option<usize>) {
+        for l in &mut self.levels {
+            if l.pyramid_level == pyramid_level {
+                l.max_points = max_points;
+            }
+        }
+    }
 }
 
 /// Everything the tracker needs to know.
@@ -480,6 +544,14 @@ impl Config {
                 return bad(
                     "motion.levels.stride",
                     format!("{} is not in 1..=16", l.stride),
+                );
+            }
+            if let Some(n) = l.max_points
+                && n < MIN_POINT_BUDGET
+            {
+                return bad(
+                    "motion.levels.max_points",
+                    format!("{n} is below {MIN_POINT_BUDGET}"),
                 );
             }
             if l.max_iterations == 0 || l.max_iterations > 1000 {
@@ -699,6 +771,40 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    #[test]
+    fn point_budgets_parse_apply_and_validate() {
+        let steps = parse_schedule("3/1/20,1/1/10/4096,0/2/8/2048").unwrap();
+        assert_eq!(
+            steps.iter().map(|l| l.max_points).collect::<Vec<_>>(),
+            vec![None, Some(4096), Some(2048)]
+        );
+        assert!(parse_schedule("0/2/8/x").is_err() && parse_schedule("0/2/8/1/1").is_err());
+        assert_eq!(
+            parse_point_budget(" 1=4096, 0=all").unwrap(),
+            vec![(1, Some(4096)), (0, None)]
+        );
+        assert!(parse_point_budget("none").unwrap().is_empty());
+        for bad in ["1", "1=", "x=5", "1=-3"] {
+            assert!(parse_point_budget(bad).is_err(), "{bad:?} parsed");
+        }
+        let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+        c.motion.set_point_budget(0, Some(3000));
+        assert_eq!(c.motion.levels[3].max_points, Some(3000));
+        assert!(c.motion.levels[..3].iter().all(|l| l.max_points.is_none()));
+        assert!(c.validate().is_ok());
+        c.motion.set_point_budget(0, Some(MIN_POINT_BUDGET - 1));
+        assert!(matches!(
+            c.validate(),
+            Err(Error::InvalidConfig {
+                field: "motion.levels.max_points",
+                ..
+            })
+        ));
+        // The paper's schedule samples every pixel it names.
+        let paper = Config::paper(cam(), Preset::Pc, Mode::L2);
+        assert!(paper.motion.levels.iter().all(|l| l.max_points.is_none()));
     }
 
     #[test]

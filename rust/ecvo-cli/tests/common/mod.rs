@@ -66,7 +66,8 @@ pub fn data_lines(path: &Path) -> Vec<String> {
 }
 
 /// Checks the counters of a summary: no loss, and every frame after the first costs
-/// one motion estimation plus one per reference it became.
+/// one motion estimation plus one per reference it became by a correction and one per
+/// correction that failed or was rejected.
 pub fn check_counters(s: &serde_json::Value, frames: u64, levels: usize) {
     assert_eq!(s["frames"].as_u64(), Some(frames), "{s}");
     assert_eq!(s["lost_frames"].as_u64(), Some(0), "{s}");
@@ -79,9 +80,14 @@ pub fn check_counters(s: &serde_json::Value, frames: u64, levels: usize) {
     assert_eq!(refs.len(), levels, "{s}");
     // A level-k reference was first a level-(k-1) reference.
     assert!(refs.windows(2).all(|w| w[0] >= w[1]), "{refs:?}");
+    let count = |k: &str| s[k].as_u64().unwrap_or_else(|| panic!("{k} in {s}"));
     assert_eq!(
         s["motion_estimations"].as_u64(),
-        Some(frames - 1 + refs.iter().sum::<u64>()),
+        Some(
+            frames - 1 + refs.iter().sum::<u64>() - count("stale_references")
+                + count("failed_corrections")
+                + count("rejected_corrections")
+        ),
         "{s}"
     );
 }

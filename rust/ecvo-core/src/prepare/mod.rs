@@ -47,6 +47,7 @@ mod pyramid;
 #[cfg(test)]
 mod reference;
 mod removal;
+mod select;
 pub(crate) mod simd;
 #[cfg(test)]
 mod tests;
@@ -108,7 +109,8 @@ impl ImageLevel {
 pub struct Template {
     /// Pyramid level the points were taken from.
     pub pyramid_level: usize,
-    /// Valid points of that level, every `stride`-th pixel.
+    /// Valid points of that level, every `stride`-th pixel (at most the step's
+    /// `max_points` of them, chosen by [`select`]), row-major.
     pub points: Vec<[f32; 4]>,
 }
 
@@ -219,6 +221,8 @@ pub struct Preparer {
     /// Compact intensity (in [0, 1]) and filtered depth (NaN where missing) of every
     /// pyramid level, full resolution first.
     planes: Vec<pyramid::Planes>,
+    /// Scratch of the template point selection.
+    selector: select::Selector,
 }
 
 impl Preparer {
@@ -254,6 +258,7 @@ impl Preparer {
             contour_seed: Vec::new(),
             mask_rows: Vec::new(),
             planes: Vec::new(),
+            selector: select::Selector::default(),
         }
     }
 
@@ -368,7 +373,16 @@ impl Preparer {
             .resize_with(self.schedule.len(), Template::default);
         for (step, t) in self.schedule.iter().zip(&mut out.templates) {
             let l = step.pyramid_level;
-            build_template(&self.planes[l], out.levels[l].camera(), step.stride, t);
+            match step.max_points {
+                None => build_template(&self.planes[l], out.levels[l].camera(), step.stride, t),
+                Some(budget) => build_selected_template(
+                    &out.levels[l],
+                    step.stride,
+                    budget,
+                    &mut self.selector,
+                    t,
+                ),
+            }
         }
         Ok(())
     }
@@ -442,4 +456,39 @@ fn build_template(p: &pyramid::Planes, c: &Camera, stride: usize, t: &mut Templa
             }
         }
     }
+}
+
+/// At most `budget` of the template points [`build_template`] would take, chosen by
+/// [`select`] from the level's samples, row-major.
+#[inline(never)]
+fn build_selected_template(
+    level: &ImageLevel,
+    stride: usize,
+    budget: usize,
+    selector: &mut select::Selector,
+    t: &mut Template,
+) {
+    let c = level.camera();
+    let w = c.width;
+    let (ifx, ify, cx, cy) = (
+        1.0 / c.fx as f32,
+        1.0 / c.fy as f32,
+        c.cx as f32,
+        c.cy as f32,
+    );
+    t.points.clear();
+    let start = (stride / 2).max(1);
+    let samples = &level.samples;
+    let points = &mut t.points;
+    selector.select(samples, w, c.height, stride, start, budget, |i| {
+        let (x, y) = (i % w, i / w);
+        let s = &samples[i];
+        let z = s[D];
+        points.push([
+            (x as f32 - cx) * ifx * z,
+            (y as f32 - cy) * ify * z,
+            z,
+            s[I],
+        ]);
+    });
 }

@@ -268,3 +268,171 @@ fn fused_passes_equal_the_old_preparation_on_small_random_frames() {
         }
     }
 }
+
+/// A 160x120 frame: the left half a textured poster on a flat wall at 2 m facing the
+/// camera, the right half blank (one gray) with depth waves of 10 cm.
+fn poster_and_waves() -> (Camera, Vec<u8>, Vec<u16>) {
+    let (w, h) = (160, 120);
+    let c = Camera {
+        width: w,
+        height: h,
+        fx: 130.0,
+        fy: 130.0,
+        cx: 79.5,
+        cy: 59.5,
+        depth_scale: 1000.0,
+    };
+    let mut intensity = vec![128u8; w * h];
+    let mut depth = vec![2000u16; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            if x < w / 2 {
+                let v = ((x / 3 + y / 5) % 4) as u8 * 40 + ((x * 7 + y * 3) % 11) as u8 * 5;
+                intensity[y * w + x] = 40 + v;
+            } else {
+                let t = x as f32 / 6.0 + y as f32 / 9.0;
+                depth[y * w + x] = (2000.0 + 100.0 * t.sin()) as u16;
+            }
+        }
+    }
+    (c, intensity, depth)
+}
+
+fn prepare(config: &Config, intensity: &[u8], depth: &[u16]) -> PreparedFrame {
+    let mut p = Preparer::new(config);
+    let mut out = PreparedFrame::for_config(config);
+    let view = FrameView {
+        timestamp: 0.0,
+        intensity,
+        depth,
+    };
+    p.prepare_into(view, &mut out).unwrap();
+    out
+}
+
+fn budgeted(c: Camera, budget: Option<usize>) -> Config {
+    let mut config = Config::new(c, Preset::Pc, Mode::L2);
+    config.motion.set_point_budget(0, budget);
+    config.motion.set_point_budget(1, budget);
+    config
+}
+
+fn point_bits(t: &Template) -> Vec<[u32; 4]> {
+    t.points.iter().map(|p| p.map(f32::to_bits)).collect()
+}
+
+#[test]
+fn point_budget_keeps_at_most_the_budget_of_the_plain_points_in_order() {
+    let (c, intensity, depth) = poster_and_waves();
+    let plain = prepare(&budgeted(c, None), &intensity, &depth);
+    for budget in [64, 300, 1000, 2500] {
+        let config = budgeted(c, Some(budget));
+        let got = prepare(&config, &intensity, &depth);
+        for (k, (step, (t, p))) in config
+            .motion
+            .levels
+            .iter()
+            .zip(got.templates.iter().zip(&plain.templates))
+            .enumerate()
+        {
+            let (tb, pb) = (point_bits(t), point_bits(p));
+            match step.max_points {
+                None => assert!(tb == pb, "step {k}: an unbudgeted step changed"),
+                Some(n) => {
+                    assert_eq!(tb.len(), n.min(pb.len()), "budget {n} step {k}");
+                    // A subsequence of the plain template: same points, row-major.
+                    let mut it = pb.iter();
+                    assert!(
+                        tb.iter().all(|q| it.any(|p| p == q)),
+                        "budget {n} step {k}: not an ordered subset"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_budget_above_the_candidates_is_bit_identical_to_none() {
+    let (c, intensity, depth) = poster_and_waves();
+    let plain = prepare(&budgeted(c, None), &intensity, &depth);
+    let big = prepare(&budgeted(c, Some(1 << 20)), &intensity, &depth);
+    same(&big, &plain, "budget 2^20");
+}
+
+#[test]
+fn selection_keeps_both_textured_and_depth_only_points_spread_out() {
+    let (c, intensity, depth) = poster_and_waves();
+    let budget = 600;
+    let got = prepare(&budgeted(c, Some(budget)), &intensity, &depth);
+    // Level 0 (stride 2): about 4,500 candidates, half of them on each side.
+    let t = got.templates.last().unwrap();
+    assert_eq!(t.pyramid_level, 0);
+    assert_eq!(t.points.len(), budget);
+    let left = t.points.iter().filter(|p| p[0] < 0.0).count();
+    let right = budget - left;
+    assert!(
+        left >= budget / 4 && right >= budget / 4,
+        "poster {left}, blank waves {right}"
+    );
+    // Spread: the points fall into most 10x10-pixel blocks of the image.
+    let mut blocks = std::collections::HashSet::new();
+    for p in &t.points {
+        let x = (p[0] / p[2] * 130.0 + 79.5).round() as i32;
+        let y = (p[1] / p[2] * 130.0 + 59.5).round() as i32;
+        blocks.insert((x / 10, y / 10));
+    }
+    assert!(blocks.len() >= 16 * 12 * 3 / 4, "{} blocks", blocks.len());
+}
+
+#[test]
+fn selection_finds_depth_structure_on_a_textureless_frame() {
+    // One gray everywhere; a flat wall with a raised ramp in its middle third.
+    let (w, h) = (160, 120);
+    let (c, _, _) = poster_and_waves();
+    let intensity = vec![90u8; w * h];
+    let mut depth = vec![2500u16; w * h];
+    for y in 0..h {
+        for x in w / 3..2 * w / 3 {
+            depth[y * w + x] = 2500 - (x - w / 3) as u16 * 8;
+        }
+    }
+    let on_ramp = |p: &&[f32; 4]| {
+        let x = p[0] / p[2] * 130.0 + 79.5;
+        x > (w / 3) as f32 + 2.0 && x < (2 * w / 3) as f32 - 2.0
+    };
+    // The cell grid follows the budget (about one cell per point); the cells on the
+    // ramp, a third of them, all keep a point before any cell of the blank wall.
+    for budget in [128, 400] {
+        let got = prepare(&budgeted(c, Some(budget)), &intensity, &depth);
+        for t in &got.templates[2..] {
+            assert_eq!(t.points.len(), budget);
+            let n = t.points.iter().filter(on_ramp).count();
+            assert!(
+                n * 10 >= budget * 3,
+                "level {}: {n} of {budget} on the ramp",
+                t.pyramid_level
+            );
+        }
+    }
+}
+
+#[test]
+fn selection_is_deterministic_with_reused_buffers() {
+    let (c, intensity, depth) = poster_and_waves();
+    let config = budgeted(c, Some(700));
+    let first = prepare(&config, &intensity, &depth);
+    // A warm preparer and a reused output, with another frame in between.
+    let mut p = Preparer::new(&config);
+    let mut out = PreparedFrame::for_config(&config);
+    let flat = vec![100u8; intensity.len()];
+    for (i, d) in [(&flat, &depth), (&intensity, &depth)] {
+        let view = FrameView {
+            timestamp: 0.0,
+            intensity: i,
+            depth: d,
+        };
+        p.prepare_into(view, &mut out).unwrap();
+    }
+    same(&out, &first, "reused");
+}
