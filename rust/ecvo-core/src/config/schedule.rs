@@ -1,0 +1,161 @@
+//! The coarse-to-fine schedule: its steps ([`MotionLevel`]), the named schedules,
+//! and the parsers of `--schedule` and `--point-budget`.
+
+use crate::error::{Error, Result};
+
+/// The smallest point budget a step may have.
+pub const MIN_POINT_BUDGET: usize = 64;
+
+/// One step of the coarse-to-fine schedule.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MotionLevel {
+    /// Image pyramid level the residuals are computed on (0 = full resolution,
+    /// each level halves width and height by 2x2 averaging).
+    pub pyramid_level: usize,
+    /// Use every `stride`-th pixel of that level in each direction (the paper
+    /// samples every 8th, 4th and 2nd pixel of the full image).
+    pub stride: usize,
+    /// At most this many Gauss-Newton iterations at this step.
+    pub max_iterations: u32,
+    /// Keep at most this many template points at this step, chosen by their
+    /// intensity and depth gradients and spread over the image
+    /// ([`crate::prepare`]'s selection); `None` keeps every valid sampled pixel.
+    pub max_points: Option<usize>,
+}
+
+/// The coarse-to-fine schedules the engine knows by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Schedule {
+    /// The paper's: every 8th, 4th, then 2nd pixel of the full-resolution image. Every
+    /// step looks the warped points up in the full-resolution image, so the basin of
+    /// convergence is about one full-resolution pixel of gradient wide.
+    PaperSampling,
+    /// A 2x2-averaged image pyramid, coarsest first (1/8 resolution), down to every
+    /// pixel of the full-resolution image.
+    Pyramid,
+    /// The pyramid from 1/8 resolution, every pixel down to half resolution, then
+    /// every second pixel of the full-resolution image: the basin of the pyramid at
+    /// the cost of the paper's sampling plus the coarse levels.
+    PyramidStride2,
+}
+
+impl Schedule {
+    /// The steps of this schedule.
+    pub fn levels(self) -> Vec<MotionLevel> {
+        let l = |pyramid_level, stride, max_iterations| MotionLevel {
+            pyramid_level,
+            stride,
+            max_iterations,
+            max_points: None,
+        };
+        match self {
+            Schedule::PaperSampling => vec![l(0, 8, 20), l(0, 4, 15), l(0, 2, 10)],
+            Schedule::Pyramid => vec![l(3, 1, 20), l(2, 1, 15), l(1, 1, 10), l(0, 1, 8)],
+            Schedule::PyramidStride2 => {
+                vec![l(3, 1, 20), l(2, 1, 15), l(1, 1, 10), l(0, 2, 8)]
+            }
+        }
+    }
+
+    /// The name the command line uses.
+    pub fn name(self) -> &'static str {
+        match self {
+            Schedule::PaperSampling => "paper",
+            Schedule::Pyramid => "pyramid",
+            Schedule::PyramidStride2 => "pyramid-stride2",
+        }
+    }
+}
+
+impl std::str::FromStr for Schedule {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "paper" => Ok(Schedule::PaperSampling),
+            "pyramid" => Ok(Schedule::Pyramid),
+            "pyramid-stride2" => Ok(Schedule::PyramidStride2),
+            _ => Err(Error::InvalidConfig {
+                field: "schedule",
+                why: format!("`{s}` is not paper, pyramid or pyramid-stride2"),
+            }),
+        }
+    }
+}
+
+/// Parses a coarse-to-fine schedule: a name (`paper`, `pyramid`, `pyramid-stride2`), or
+/// steps written `LEVEL/STRIDE/ITERATIONS` or `LEVEL/STRIDE/ITERATIONS/POINTS` (a
+/// point budget, [`MotionLevel::max_points`]), comma-separated, coarsest first (e.g.
+/// `3/1/20,2/1/15,1/1/10,0/2/8`). Ranges are checked by [`Config::validate`].
+pub fn parse_schedule(s: &str) -> Result<Vec<MotionLevel>> {
+    if let Ok(named) = s.parse::<Schedule>() {
+        return Ok(named.levels());
+    }
+    let bad = |why: String| Error::InvalidConfig {
+        field: "schedule",
+        why,
+    };
+    s.split(',')
+        .map(|step| {
+            let parts: Vec<&str> = step.trim().split('/').collect();
+            let (level, stride, iterations, points) = match parts[..] {
+                [l, s, i] => (l, s, i, None),
+                [l, s, i, p] => (l, s, i, Some(p)),
+                _ => {
+                    return Err(bad(format!(
+                        "`{step}` is not LEVEL/STRIDE/ITERATIONS[/POINTS] (and `{s}` is not paper, pyramid or pyramid-stride2)"
+                    )));
+                }
+            };
+            let num = |t: &str, what: &str| {
+                t.trim()
+                    .parse::<u32>()
+                    .map_err(|_| bad(format!("`{step}`: {what} `{t}` is not a whole number")))
+            };
+            Ok(MotionLevel {
+                pyramid_level: num(level, "level")? as usize,
+                stride: num(stride, "stride")? as usize,
+                max_iterations: num(iterations, "iterations")?,
+                max_points: match points {
+                    Some(p) => Some(num(p, "points")? as usize),
+                    None => None,
+                },
+            })
+        })
+        .collect()
+}
+
+/// Parses per-level point budgets written `LEVEL=POINTS`, comma-separated, e.g.
+/// `1=4096,0=4096`; `POINTS` may be `all` (no budget). `none` or an empty string
+/// gives no entry. Apply them with [`MotionConfig::set_point_budget`].
+pub fn parse_point_budget(s: &str) -> Result<Vec<(usize, Option<usize>)>> {
+    let bad = |why: String| Error::InvalidConfig {
+        field: "point_budget",
+        why,
+    };
+    let s = s.trim();
+    if s.is_empty() || s.eq_ignore_ascii_case("none") {
+        return Ok(Vec::new());
+    }
+    s.split(',')
+        .map(|pair| {
+            let (l, n) = pair
+                .split_once('=')
+                .ok_or_else(|| bad(format!("`{pair}` is not LEVEL=POINTS, e.g. 0=4096")))?;
+            let level = l
+                .trim()
+                .parse::<usize>()
+                .map_err(|_| bad(format!("`{pair}`: level `{l}` is not a whole number")))?;
+            let n = n.trim();
+            let points = if n.eq_ignore_ascii_case("all") {
+                None
+            } else {
+                Some(n.parse::<usize>().map_err(|_| {
+                    bad(format!(
+                        "`{pair}`: points `{n}` is not a whole number or all"
+                    ))
+                })?)
+            };
+            Ok((level, points))
+        })
+        .collect()
+}

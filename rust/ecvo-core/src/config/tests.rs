@@ -1,0 +1,149 @@
+use super::*;
+
+fn cam() -> Camera {
+    Camera {
+        width: 320,
+        height: 240,
+        fx: 258.65,
+        fy: 258.25,
+        cx: 159.05,
+        cy: 127.4,
+        depth_scale: 5000.0,
+    }
+}
+
+#[test]
+fn presets_carry_the_papers_values() {
+    let pc = Config::new(cam(), Preset::Pc, Mode::L2);
+    assert_eq!(
+        pc.reference_levels,
+        vec![
+            ReferenceLevel::mm_deg(30.0, 7.0),
+            ReferenceLevel::mm_deg(120.0, 12.0)
+        ]
+    );
+    assert_eq!(pc.filter.normal_max_angle_deg, Some(28.0));
+    assert_eq!(pc.filter.contour_angle_deg, Some(7.0));
+    assert_eq!(pc.motion.depth_gain, 1.8);
+    let phone = Config::new(cam(), Preset::Phone, Mode::L1);
+    assert_eq!(
+        phone.reference_levels,
+        vec![ReferenceLevel::mm_deg(30.0, 3.0)]
+    );
+    assert_eq!(phone.filter.normal_max_angle_deg, Some(45.0));
+    assert_eq!(phone.filter.contour_angle_deg, Some(20.0));
+    assert!(
+        Config::new(cam(), Preset::Pc, Mode::Naive)
+            .reference_levels
+            .is_empty()
+    );
+    assert!(pc.validate().is_ok() && phone.validate().is_ok());
+}
+
+#[test]
+fn schedules_parse_by_name_and_by_steps() {
+    assert_eq!(
+        parse_schedule("paper").unwrap(),
+        Schedule::PaperSampling.levels()
+    );
+    assert_eq!(
+        parse_schedule(" 3/1/20, 2/1/15,1/1/10,0/2/8").unwrap(),
+        Schedule::PyramidStride2.levels()
+    );
+    for bad in ["", "3/1", "3/1/20,", "a/1/2", "3/-1/2", "pyramid-stride3"] {
+        assert!(
+            matches!(
+                parse_schedule(bad),
+                Err(Error::InvalidConfig {
+                    field: "schedule",
+                    ..
+                })
+            ),
+            "{bad:?} parsed"
+        );
+    }
+}
+
+#[test]
+fn validate_rejects_bad_fields() {
+    let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+    c.motion.depth_gain = f64::NAN;
+    assert!(matches!(
+        c.validate(),
+        Err(Error::InvalidConfig {
+            field: "motion.depth_gain",
+            ..
+        })
+    ));
+    let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+    c.motion.levels[0].pyramid_level = 6;
+    assert!(matches!(
+        c.validate(),
+        Err(Error::InvalidConfig {
+            field: "motion.levels",
+            ..
+        })
+    ));
+    let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+    c.filter.contour_angle_deg = Some(95.0);
+    assert!(matches!(
+        c.validate(),
+        Err(Error::InvalidConfig {
+            field: "filter.contour_angle_deg",
+            ..
+        })
+    ));
+}
+
+#[test]
+fn point_budgets_parse_apply_and_validate() {
+    let steps = parse_schedule("3/1/20,1/1/10/4096,0/2/8/2048").unwrap();
+    assert_eq!(
+        steps.iter().map(|l| l.max_points).collect::<Vec<_>>(),
+        vec![None, Some(4096), Some(2048)]
+    );
+    assert!(parse_schedule("0/2/8/x").is_err() && parse_schedule("0/2/8/1/1").is_err());
+    assert_eq!(
+        parse_point_budget(" 1=4096, 0=all").unwrap(),
+        vec![(1, Some(4096)), (0, None)]
+    );
+    assert!(parse_point_budget("none").unwrap().is_empty());
+    for bad in ["1", "1=", "x=5", "1=-3"] {
+        assert!(parse_point_budget(bad).is_err(), "{bad:?} parsed");
+    }
+    let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+    c.motion.set_point_budget(0, Some(3000));
+    assert_eq!(c.motion.levels[3].max_points, Some(3000));
+    assert!(c.motion.levels[..3].iter().all(|l| l.max_points.is_none()));
+    assert!(c.validate().is_ok());
+    c.motion.set_point_budget(0, Some(MIN_POINT_BUDGET - 1));
+    assert!(matches!(
+        c.validate(),
+        Err(Error::InvalidConfig {
+            field: "motion.levels.max_points",
+            ..
+        })
+    ));
+    // The paper's schedule samples every pixel it names.
+    let paper = Config::paper(cam(), Preset::Pc, Mode::L2);
+    assert!(paper.motion.levels.iter().all(|l| l.max_points.is_none()));
+}
+
+#[test]
+fn levels_parse() {
+    let l = parse_levels("30mm:7deg,0.12m:12deg").unwrap();
+    assert_eq!(
+        l,
+        vec![
+            ReferenceLevel::mm_deg(30.0, 7.0),
+            ReferenceLevel {
+                max_distance_m: 0.12,
+                max_angle_deg: 12.0
+            }
+        ]
+    );
+    assert!(parse_levels("").unwrap().is_empty());
+    assert!(parse_levels("30:7").is_err());
+    assert!(parse_levels("30mm:7").is_err());
+    assert!(parse_levels("-3mm:7deg").is_err());
+}
