@@ -39,14 +39,10 @@ if [[ ${#seqs[@]} -eq 0 ]]; then
 fi
 [[ $rounds =~ ^[1-9][0-9]*$ ]] || { echo "--rounds: a positive integer, got '$rounds'" >&2; exit 2; }
 
-if [[ ! -x $venv/bin/python ]] || ! "$venv/bin/python" -c 'import cv2, numpy' 2>/dev/null; then
-    echo "setting up $venv (opencv-contrib-python, numpy)" >&2
-    python3 -m venv "$venv"
-    "$venv/bin/pip" install --quiet opencv-contrib-python numpy >&2
-fi
-if [[ ! -x $ecvo ]]; then
-    (cd "$root" && cargo build --release -p ecvo-cli >&2)
-fi
+# shellcheck source=setup.sh
+. "$root/scripts/peers/setup.sh"
+ensure_peers_venv "$venv"
+ensure_ecvo "$root" "$ecvo"
 
 mkdir -p "$out"
 results=$out/rounds.tsv

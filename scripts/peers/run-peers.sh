@@ -42,15 +42,11 @@ if [[ ${#seqs[@]} -eq 0 ]]; then
     exit 2
 fi
 
-if [[ ! -x $venv/bin/python ]] || ! "$venv/bin/python" -c 'import cv2, numpy' 2>/dev/null; then
-    echo "setting up $venv (opencv-contrib-python, numpy)" >&2
-    python3 -m venv "$venv"
-    "$venv/bin/pip" install --quiet opencv-contrib-python numpy >&2
-fi
+# shellcheck source=setup.sh
+. "$root/scripts/peers/setup.sh"
+ensure_peers_venv "$venv"
+ensure_ecvo "$root" "$ecvo"
 
-if [[ ! -x $ecvo ]]; then
-    (cd "$root" && cargo build --release -p ecvo-cli >&2)
-fi
 
 args=()
 if [[ ,$peers, == *,vors,* ]]; then

@@ -388,14 +388,20 @@ impl Preparer {
     }
 }
 
-/// `(x - cx) / fx` per column and `(y - cy) / fy` per row of `c`.
-fn rays(c: &Camera) -> (Vec<f32>, Vec<f32>) {
-    let (ifx, ify, cx, cy) = (
+/// `(1/fx, 1/fy, cx, cy)` in `f32`: a pixel `(x, y)` at depth `z` back-projects to
+/// `((x - cx) z / fx, (y - cy) z / fy, z)`.
+fn back_projection(c: &Camera) -> (f32, f32, f32, f32) {
+    (
         1.0 / c.fx as f32,
         1.0 / c.fy as f32,
         c.cx as f32,
         c.cy as f32,
-    );
+    )
+}
+
+/// `(x - cx) / fx` per column and `(y - cy) / fy` per row of `c`.
+fn rays(c: &Camera) -> (Vec<f32>, Vec<f32>) {
+    let (ifx, ify, cx, cy) = back_projection(c);
     (
         (0..c.width).map(|x| (x as f32 - cx) * ifx).collect(),
         (0..c.height).map(|y| (y as f32 - cy) * ify).collect(),
@@ -435,12 +441,7 @@ pub fn max_template_points(config: &Config) -> usize {
 #[inline(never)]
 fn build_template(p: &pyramid::Planes, c: &Camera, stride: usize, t: &mut Template) {
     let (w, h) = (c.width, c.height);
-    let (ifx, ify, cx, cy) = (
-        1.0 / c.fx as f32,
-        1.0 / c.fy as f32,
-        c.cx as f32,
-        c.cy as f32,
-    );
+    let (ifx, ify, cx, cy) = back_projection(c);
     t.points.clear();
     let start = (stride / 2).max(1);
     for y in (start..h - 1).step_by(stride) {
@@ -470,12 +471,7 @@ fn build_selected_template(
 ) {
     let c = level.camera();
     let w = c.width;
-    let (ifx, ify, cx, cy) = (
-        1.0 / c.fx as f32,
-        1.0 / c.fy as f32,
-        c.cx as f32,
-        c.cy as f32,
-    );
+    let (ifx, ify, cx, cy) = back_projection(c);
     t.points.clear();
     let start = (stride / 2).max(1);
     let samples = &level.samples;
