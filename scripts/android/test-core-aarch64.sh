@@ -5,6 +5,7 @@
 # qemu-aarch64 (no -L: with libc6:arm64 installed, -L makes threaded programs hang).
 #
 # Usage: scripts/android/test-core-aarch64.sh [extra `cargo test` args, e.g. -- --nocapture]
+#        scripts/android/test-core-aarch64.sh --setup-only   (install and check the toolchain)
 # Environment:
 #   ECVO_QEMU_TARGET_DIR  target dir (default <repo>/target/aarch64-qemu). CARGO_TARGET_DIR is
 #                         deliberately ignored: Debian's rustc 1.96 and rustup's 1.95 must not
@@ -37,6 +38,8 @@ command -v qemu-aarch64 >/dev/null || die "qemu-aarch64 missing (package qemu-us
   || die "Debian rustc has no aarch64-unknown-linux-gnu std (libstd-rust-web-dev:arm64)"
 
 log "$(/usr/bin/rustc --version) (Debian) + qemu-aarch64 $(qemu-aarch64 --version | head -1 | awk '{print $3}'); package $PKG; target dir $TDIR"
+# --setup-only: install and check the toolchain, run nothing (bench-core-aarch64.sh).
+[ "${1:-}" = --setup-only ] && exit 0
 cd "$REPO"
 # Drop rustup's toolchain selection so nothing reroutes /usr/bin/cargo's rustc.
 env -u RUSTUP_TOOLCHAIN -u RUSTC_WRAPPER -u RUSTFLAGS -u CARGO_BUILD_TARGET \

@@ -64,11 +64,9 @@ impl PoseLog {
     /// The kept poses with `index >= from` (from the window's start if `from` is
     /// before it; check the records' `index`).
     pub(crate) fn poses_since(&self, from: u64) -> Vec<PoseRecord> {
-        let skip = usize::try_from(from.saturating_sub(self.start)).unwrap_or(usize::MAX);
-        if skip >= self.poses.len() {
-            return Vec::new();
-        }
-        self.poses.range(skip..).copied().collect()
+        let mut out = Vec::new();
+        self.chunk(from, usize::MAX, &mut out);
+        out
     }
 
     /// Clears `out` and copies into it at most `max` kept poses with `index >= from`;

@@ -124,72 +124,40 @@ impl Pipeline {
     /// A snapshot of the statistics, callable at any time.
     pub fn stats(&self) -> PipelineStats {
         let s = &*self.shared;
-        let (progress, wall) = {
-            let p = lock(&s.progress);
-            let wall = match (p.first_push, p.last_tracked) {
-                (Some(a), Some(b)) if p.tracked > 0 => {
-                    b.saturating_duration_since(a).as_secs_f64() * 1e3 / p.tracked as f64
-                }
-                _ => 0.0,
-            };
-            (
-                [
-                    p.pushed,
-                    p.tracked,
-                    p.dropped_at_input,
-                    p.dropped_at_tracker,
-                    p.failed_preparations,
-                    p.geometry_skipped,
-                    p.outputs_discarded,
-                    p.ahead_computed,
-                    p.ahead_used,
-                    p.timestamps_rejected,
-                    p.repeated_frames,
-                    p.intrinsics_changes,
-                ],
-                wall,
-            )
+        // A copy, so that the lock is not held while the other locks are taken.
+        let p = *lock(&s.progress);
+        let wall = match (p.first_push, p.last_tracked) {
+            (Some(a), Some(b)) if p.tracked > 0 => {
+                b.saturating_duration_since(a).as_secs_f64() * 1e3 / p.tracked as f64
+            }
+            _ => 0.0,
         };
-        let [
-            pushed,
-            tracked,
-            dropped_at_input,
-            dropped_at_tracker,
-            failed_preparations,
-            geometry_skipped,
-            outputs_discarded,
-            ahead_computed,
-            ahead_used,
-            timestamps_rejected,
-            repeated_frames,
-            intrinsics_changes,
-        ] = progress;
         PipelineStats {
             filter: lock(&s.timers.filter).summary(),
             tracker: lock(&s.timers.tracker).summary(),
             geometry: lock(&s.timers.geometry).summary(),
             latency: lock(&s.timers.latency).summary(),
             wall_ms_per_frame: wall,
-            pushed,
-            tracked,
-            dropped: dropped_at_input + dropped_at_tracker,
-            dropped_at_input,
-            dropped_at_tracker,
-            failed_preparations,
-            geometry_skipped,
-            outputs_discarded,
-            ahead_computed,
-            ahead_used,
-            timestamps_rejected,
-            repeated_frames,
-            intrinsics_changes,
+            pushed: p.pushed,
+            tracked: p.tracked,
+            dropped: p.dropped_at_input + p.dropped_at_tracker,
+            dropped_at_input: p.dropped_at_input,
+            dropped_at_tracker: p.dropped_at_tracker,
+            failed_preparations: p.failed_preparations,
+            geometry_skipped: p.geometry_skipped,
+            outputs_discarded: p.outputs_discarded,
+            ahead_computed: p.ahead_computed,
+            ahead_used: p.ahead_used,
+            timestamps_rejected: p.timestamps_rejected,
+            repeated_frames: p.repeated_frames,
+            intrinsics_changes: p.intrinsics_changes,
             poses_discarded: lock(&s.poses).start(),
             input_queue: s.input.stats(),
             tracker_queue: s.prepared.stats(),
             geometry_queue: s.to_geometry.stats(),
             frame_pool: s.frames.stats(),
             counters: lock(&s.counters).clone(),
-            cloud_points: s.cloud.as_ref().map_or(0, |c| lock(c).points.len()),
+            cloud_points: self.cloud_len(),
         }
     }
 }

@@ -55,7 +55,7 @@ pub(crate) struct GeometryItem {
     pub(crate) pose: Pose,
 }
 
-#[derive(Default)]
+#[derive(Clone, Copy, Default)]
 pub(crate) struct Progress {
     pub(crate) pushed: u64,
     pub(crate) tracked: u64,
