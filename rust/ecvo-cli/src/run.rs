@@ -479,6 +479,8 @@ fn summary_json(
         "stale_references": c.stale_references,
         "predicted_starts": c.predicted_starts,
         "reanchors": c.reanchors,
+        "implausible_motions": c.implausible_motions,
+        "spread_jumps": c.spread_jumps,
         "frame_step": settings.frame_step,
         "engine": settings.engine.describe(&t.config),
         "ground_truth": t.sequence.groundtruth().is_some(),

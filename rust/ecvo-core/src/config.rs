@@ -229,6 +229,12 @@ pub struct Config {
     /// head-mounted camera stays well below 4 m/s; an unannounced zoom or a
     /// teleport reads as tens of m/s. `f64::INFINITY` believes every speed.
     pub max_speed_m_s: f64,
+    /// A registration whose intensity and depth residual spreads (the bivariate
+    /// scale's `√Σ_II` and `√Σ_ZZ`) are both more than this many times the medians of
+    /// the last believed frame-to-frame registrations' is not believed either (see
+    /// [`crate::spread`]): no rigid motion explains the two frames. Checked with
+    /// bivariate weighting only. `f64::INFINITY` switches it off.
+    pub max_spread_jump: f64,
     /// A frame becomes an anchor after a loss only with at least this fraction of
     /// its pixels carrying depth after filtering.
     pub min_anchor_depth_fraction: f64,
@@ -291,6 +297,7 @@ impl Config {
             max_lost_frames: 10,
             max_correction_distance: 100.0,
             max_speed_m_s: 4.0,
+            max_spread_jump: 5.0,
             min_anchor_depth_fraction: 0.05,
             min_anchor_texture_fraction: 0.02,
         }
@@ -308,6 +315,7 @@ impl Config {
         c.motion.prior = MotionPrior::Identity;
         c.max_correction_distance = f64::INFINITY;
         c.max_speed_m_s = f64::INFINITY;
+        c.max_spread_jump = f64::INFINITY;
         c.motion.max_intensity_sigma = f64::INFINITY;
         c.motion.max_depth_sigma_m = f64::INFINITY;
         c
@@ -430,6 +438,12 @@ impl Config {
                 field: "max_speed_m_s",
                 why: format!("{} is not positive", self.max_speed_m_s),
             });
+        }
+        if !(self.max_spread_jump > 1.0) {
+            return bad(
+                "max_spread_jump",
+                format!("{} is not above 1", self.max_spread_jump),
+            );
         }
         if !(self.max_correction_distance > 0.0) {
             return bad(

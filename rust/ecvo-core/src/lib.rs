@@ -21,6 +21,7 @@ pub mod motion;
 pub mod prepare;
 pub mod scale;
 pub mod se3;
+pub mod spread;
 pub mod tracker;
 
 pub use camera::{Camera, FrameView};

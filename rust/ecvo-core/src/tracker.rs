@@ -13,11 +13,12 @@ use std::sync::Arc;
 
 use crate::Pose;
 use crate::camera::{Camera, FrameView};
-use crate::config::{Config, MotionPrior, ReferenceLevel};
+use crate::config::{Config, MotionPrior, ReferenceLevel, Weighting};
 use crate::error::Result;
 use crate::motion::{MotionEstimator, MotionResult};
 use crate::prepare::{PreparedFrame, Preparer};
 use crate::se3;
+use crate::spread::SpreadWatch;
 
 /// `comp(T, (εd, εa))`: true when `‖t‖ > εd` or `tr(R) < 2 cos εa + 1`, i.e. when the
 /// motion since the reference calls for a correction (section 3.2).
@@ -97,6 +98,10 @@ pub struct Counters {
     /// Registrations ([A] or a recovery) not believed because they implied a camera
     /// faster than [`Config::max_speed_m_s`].
     pub implausible_motions: u64,
+    /// Registrations ([A] or a recovery) not believed because their intensity and
+    /// depth residuals both spread more than [`Config::max_spread_jump`] times wider
+    /// than the recent frame-to-frame registrations' ([`crate::spread`]).
+    pub spread_jumps: u64,
 }
 
 /// Slack on the speed check, metres: registration noise on a short interval.
@@ -177,6 +182,8 @@ pub struct Tracker<F> {
     velocity: Option<Velocity>,
     /// Refused corrections in a row against each level's current reference.
     refused: Vec<u32>,
+    /// Residual spreads of the last believed [A]s.
+    spread: SpreadWatch,
 }
 
 impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
@@ -197,6 +204,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             state: TrackingState::Initialising,
             velocity: None,
             refused: vec![0; levels],
+            spread: SpreadWatch::default(),
             config,
         })
     }
@@ -305,9 +313,16 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             if !ok {
                 self.counters.implausible_motions += 1;
             }
-            ok
+            let jumped = ok && self.spread_jumped(&f2f);
+            if jumped {
+                self.counters.spread_jumps += 1;
+            }
+            ok && !jumped
         };
         let mut pose = if believed {
+            if let Some(s) = &f2f.scale {
+                self.spread.record(s);
+            }
             if f2f.start > 0 {
                 self.counters.predicted_starts += 1;
             }
@@ -418,6 +433,10 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
                     self.counters.implausible_motions += 1;
                     continue;
                 }
+                if self.spread_jumped(&r) {
+                    self.counters.spread_jumps += 1;
+                    continue;
+                }
                 self.counters.recovered_frames += 1;
                 out.recovered = true;
                 return Some(pose);
@@ -465,7 +484,18 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             *r = 0;
         }
         self.velocity = None;
+        self.spread.clear();
         self.prev = Some(Kept { frame, pose, index });
+    }
+
+    /// True when `r`'s intensity and depth residuals both spread more than
+    /// [`Config::max_spread_jump`] times wider than the recent [A]s'. Only bivariate
+    /// weighting estimates the two spreads apart; with scalar weighting the check is
+    /// off.
+    fn spread_jumped(&self, r: &MotionResult) -> bool {
+        self.config.motion.weighting == Weighting::Bivariate
+            && r.scale
+                .is_some_and(|s| self.spread.is_jump(&s, self.config.max_spread_jump))
     }
 }
 

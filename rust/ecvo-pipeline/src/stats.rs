@@ -204,6 +204,7 @@ pub(crate) fn copy_counters(dst: &mut Counters, src: &Counters) {
         predicted_starts,
         reanchors,
         implausible_motions,
+        spread_jumps,
     } = src;
     dst.frames = *frames;
     dst.motion_estimations = *motion_estimations;
@@ -216,6 +217,7 @@ pub(crate) fn copy_counters(dst: &mut Counters, src: &Counters) {
     dst.predicted_starts = *predicted_starts;
     dst.reanchors = *reanchors;
     dst.implausible_motions = *implausible_motions;
+    dst.spread_jumps = *spread_jumps;
 }
 
 #[cfg(test)]

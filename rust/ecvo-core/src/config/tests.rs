@@ -93,6 +93,23 @@ fn validate_rejects_bad_fields() {
             ..
         })
     ));
+    for jump in [1.0, 0.5, f64::NAN] {
+        let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+        c.max_spread_jump = jump;
+        assert!(
+            matches!(
+                c.validate(),
+                Err(Error::InvalidConfig {
+                    field: "max_spread_jump",
+                    ..
+                })
+            ),
+            "{jump} accepted"
+        );
+    }
+    let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+    c.max_spread_jump = f64::INFINITY;
+    assert!(c.validate().is_ok(), "infinity switches the check off");
 }
 
 #[test]

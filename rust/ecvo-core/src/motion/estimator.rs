@@ -178,7 +178,7 @@ pub(super) fn motion_from<K: Loops>(
     result.error = last.cost;
     result.valid_pixels = last.valid;
     result.information = ne.hessian();
-    result.scale = last.scale;
+    result.scale = check.or(last.scale);
     let pose = t.inverse();
     result.status = if last.valid < cfg.min_valid_pixels {
         Status::Failed(Failure::TooFewPixels)

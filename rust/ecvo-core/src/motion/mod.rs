@@ -95,7 +95,9 @@ pub struct MotionResult {
     /// `JᵀWJ` at the finest step, whitened by the estimated scale: the information
     /// matrix of the twist `[v; ω]` of the left perturbation of `T_{j→i}`.
     pub information: Matrix6<f64>,
-    /// The residuals' scale at the finest step.
+    /// The residuals' scale at the finest step, in the form of
+    /// [`MotionConfig::weighting`] (refitted on the finest step's residuals when
+    /// `fine_weighting` weighed that step otherwise): what the spread checks read.
     pub scale: Option<Scale>,
     /// Which initial guess won at the coarsest step (0: the first).
     pub start: u8,

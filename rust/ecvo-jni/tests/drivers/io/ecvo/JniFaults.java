@@ -11,9 +11,10 @@ import java.util.Random;
  * threw) and after how many good frames it said tracking again, and checks that every
  * pose stays finite; the last pose is compared with that of the same stream without a
  * fault. Exit status 1 if a pose is not finite, a push threw something undocumented, a
- * covered lens / wrong-size frame is not flagged at once, or an announced zoom
- * (nativeSetIntrinsics) is not tracked throughout, ending within 1 cm of the run
- * without a fault.
+ * covered lens / wrong-size frame is not flagged at once, an unannounced zoom is not
+ * flagged at once or is reported tracking while zoomed, or an announced zoom
+ * (nativeSetIntrinsics) is not tracked throughout; either zoom must end within 1 cm
+ * of the run without a fault.
  *
  * java -Xcheck:jni -Djava.library.path=target/release -cp CLASSES io.ecvo.JniFaults DATA_DIR
  */
@@ -122,6 +123,10 @@ public final class JniFaults {
                     st.substring(GOOD + BAD), finite ? "yes" : "NO", cm);
             ok &= finite;
             if (fault.equals("digital zoom 1.3x, nativeSetIntrinsics")) ok &= st.indexOf('L') < 0 && st.indexOf('X') < 0 && cm < 1.0;
+            else if (fault.equals("digital zoom 1.3x, not told")) {
+                // Never reported tracking while zoomed, flagged at once, no drift after.
+                ok &= detected != null && detected == 1 && st.substring(GOOD, GOOD + BAD).indexOf('T') < 0 && cm < 1.0;
+            }
             else if (!fault.equals("none") && !fault.equals("black intensity") && !fault.equals("garbage depth") && !fault.startsWith("digital zoom")) {
                 ok &= detected != null && detected == 1;
             }
