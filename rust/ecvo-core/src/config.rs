@@ -163,6 +163,9 @@ pub struct MotionConfig {
     /// Stop a level when the update's translation (m) and rotation (rad) are both
     /// below this.
     pub min_update: f64,
+    /// The scale's fixed-point iteration stops when no entry of Σ moved by more than
+    /// this fraction of its diagonal scale.
+    pub scale_tolerance: f64,
     /// A result with fewer valid residuals than this at the finest level failed.
     pub min_valid_pixels: usize,
     /// A result moving more than this between the two frames (metres) failed.
@@ -283,6 +286,7 @@ impl Config {
                 t_dof: 5.0,
                 levels: Schedule::PyramidStride2.levels(),
                 min_update: 1e-6,
+                scale_tolerance: 1e-2,
                 min_valid_pixels: 200,
                 max_translation_m: 0.5,
                 max_rotation_deg: 45.0,
@@ -310,6 +314,7 @@ impl Config {
     pub fn paper(camera: Camera, preset: Preset, mode: Mode) -> Self {
         let mut c = Config::new(camera, preset, mode);
         c.motion.levels = Schedule::PaperSampling.levels();
+        c.motion.scale_tolerance = 1e-3;
         c.motion.weighting = Weighting::Scalar;
         c.motion.depth_noise = DepthNoiseModel::Constant;
         c.motion.prior = MotionPrior::Identity;
@@ -419,6 +424,12 @@ impl Config {
             return bad(
                 "motion.min_update",
                 format!("{} is not positive", m.min_update),
+            );
+        }
+        if !(m.scale_tolerance > 0.0 && m.scale_tolerance <= 0.1) {
+            return bad(
+                "motion.scale_tolerance",
+                format!("{} is not in (0, 0.1]", m.scale_tolerance),
             );
         }
         if !(m.max_intensity_sigma > 0.0 && m.max_depth_sigma_m > 0.0) {

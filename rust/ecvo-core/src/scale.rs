@@ -238,10 +238,9 @@ pub fn add_moments(acc: &mut PassSums, ri: f32, rz: f32, weighting: Weighting) {
     }
 }
 
-/// True when the fixed point has settled: every entry of Σ moved by less than 0.1 %
-/// of its diagonal scale.
-pub fn settled(a: &Scale, b: &Scale) -> bool {
-    let tol = 1e-3;
+/// True when the fixed point has settled: every entry of Σ moved by less than `tol`
+/// (a fraction) of its diagonal scale.
+pub fn settled(a: &Scale, b: &Scale, tol: f64) -> bool {
     (a.ii - b.ii).abs() < tol * a.ii
         && (a.zz - b.zz).abs() < tol * a.zz
         && (a.iz - b.iz).abs() < tol * (a.ii * a.zz).sqrt()
@@ -278,7 +277,7 @@ mod tests {
                 one += o;
             }
             let next = next_scale(&sums, two, one, weighting).unwrap();
-            let done = settled(&s, &next);
+            let done = settled(&s, &next, 1e-3);
             s = next;
             if done {
                 break;

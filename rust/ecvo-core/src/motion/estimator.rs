@@ -58,6 +58,8 @@ pub(super) struct Params {
     pub(super) weighting: Weighting,
     /// The quadratic depth noise model.
     pub(super) quadratic_noise: bool,
+    /// [`MotionConfig::scale_tolerance`].
+    pub(super) scale_tolerance: f64,
 }
 
 impl Params {
@@ -67,6 +69,7 @@ impl Params {
             lambda: cfg.depth_gain as f32,
             weighting: cfg.weighting,
             quadratic_noise: cfg.depth_noise == DepthNoiseModel::Quadratic,
+            scale_tolerance: cfg.scale_tolerance,
         }
     }
 }
@@ -330,7 +333,7 @@ fn fit_scale<K: Loops>(lp: &mut K, p: &Params, start: Option<Scale>) -> Option<S
     for _ in 0..MAX_SCALE_PASSES {
         let total = lp.pass(&s.whitener(p.nu), p.weighting);
         let next = scale::next_scale(&total, two, one, p.weighting)?;
-        let done = scale::settled(&s, &next);
+        let done = scale::settled(&s, &next, p.scale_tolerance);
         s = next;
         if done {
             break;

@@ -56,6 +56,7 @@ fn params(weighting: Weighting, quadratic_noise: bool) -> Params {
         lambda: 1.0,
         weighting,
         quadratic_noise,
+        scale_tolerance: 1e-3,
     }
 }
 
