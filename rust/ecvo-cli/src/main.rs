@@ -123,6 +123,10 @@ enum Command {
         /// (0.4–4.5; the mean viewing depth is within about 10 % of it).
         #[arg(long)]
         depth: Option<f64>,
+        /// Texture contrast of every surface, (0, 1]: 1 is the standard room, 0.05 a
+        /// room of nearly blank walls (the shading of each face still differs).
+        #[arg(long, default_value_t = 1.0)]
+        texture_contrast: f64,
         /// Fast motion: peak rotation rate between frames, degrees per second.
         #[arg(long)]
         max_rot_speed: Option<f64>,
@@ -343,6 +347,7 @@ fn dispatch(command: Command) -> Result<()> {
             depth,
             max_rot_speed,
             max_speed,
+            texture_contrast,
         } => synth::synth_command(
             &out,
             frames,
@@ -354,6 +359,7 @@ fn dispatch(command: Command) -> Result<()> {
                 depth,
                 max_rot_speed_deg: max_rot_speed,
                 max_speed,
+                texture_contrast,
             },
         ),
     }

@@ -49,12 +49,27 @@ pub struct MotionArgs {
     pub max_rot_speed_deg: Option<f64>,
     /// Fast only: peak speed, metres per second (default 1).
     pub max_speed: Option<f64>,
+    /// Texture contrast of every surface, (0, 1]: 1 the standard room, towards 0
+    /// blank walls.
+    pub texture_contrast: f64,
 }
 
 impl MotionArgs {
     /// The sequence (noise still the preset's), or an error naming the flag that is out
     /// of range or given without `--motion fast`.
     fn sequence(&self, frames: usize, seed: u64) -> Result<SynthSequence> {
+        let c = self.texture_contrast;
+        if !(c > 0.0 && c <= 1.0) {
+            bail!("--texture-contrast must be in (0, 1], got {c}");
+        }
+        let mut seq = self.motion_sequence(frames, seed)?;
+        if c < 1.0 {
+            seq.scene.scale_contrast(c);
+        }
+        Ok(seq)
+    }
+
+    fn motion_sequence(&self, frames: usize, seed: u64) -> Result<SynthSequence> {
         match self.motion {
             Motion::Slow => {
                 for (flag, given) in [

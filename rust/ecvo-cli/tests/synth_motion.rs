@@ -116,6 +116,14 @@ fn motion_flags_are_checked() {
             vec!["--motion", "fast", "--max-speed", "0"],
             "--max-speed must be",
         ),
+        (
+            vec!["--texture-contrast", "0"],
+            "--texture-contrast must be",
+        ),
+        (
+            vec!["--texture-contrast", "1.5"],
+            "--texture-contrast must be",
+        ),
     ] {
         let mut all = vec!["synth", "--out", o, "--frames", "2"];
         all.extend_from_slice(&args);
@@ -125,4 +133,42 @@ fn motion_flags_are_checked() {
         assert!(err.contains(message), "{args:?}: {err}");
         assert!(!out.join("rgb.txt").exists(), "{args:?} wrote a stream");
     }
+}
+
+#[test]
+fn blank_walls_are_tracked_on_depth() {
+    // The room with 2 % of its texture contrast: the intensity gradients are about a
+    // quarter of the standard room's (mostly noise and the shading edges between
+    // faces), so tracking rests on the depth residuals. Measured (phone noise, seed
+    // 3): 4.3 mm ATE over these 60 frames, 0 lost (2.8 mm over 150); bounded at 6 mm.
+    let dir = temp_dir("synth-blank");
+    let seq = dir.join("seq");
+    let s = seq.to_str().unwrap();
+    run_ok(&[
+        "synth",
+        "--out",
+        s,
+        "--frames",
+        "60",
+        "--seed",
+        "3",
+        "--texture-contrast",
+        "0.02",
+    ]);
+    let out = dir.join("out");
+    run_ok(&[
+        "run",
+        s,
+        "--out",
+        out.to_str().unwrap(),
+        "--preset",
+        "phone",
+        "--threads",
+        "1",
+    ]);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let ate = summary["ate_rmse_m"].as_f64().unwrap();
+    assert_eq!(summary["lost_frames"].as_u64(), Some(0), "{summary}");
+    assert!(ate < 0.006, "ATE {ate} m on blank walls");
 }

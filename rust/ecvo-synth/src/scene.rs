@@ -275,6 +275,14 @@ impl Texture {
         t
     }
 
+    /// The same texture with its contrast multiplied by `factor`: towards a plain
+    /// mid-grey surface (a blank wall) as `factor` goes to 0.
+    pub fn with_contrast(&self, factor: f64) -> Self {
+        let mut t = self.clone();
+        t.contrast *= factor;
+        t
+    }
+
     /// Intensity (0–255, not rounded) at surface coordinates `(u, v)` in metres.
     #[inline]
     pub fn eval(&self, u: f64, v: f64) -> f64 {
@@ -391,6 +399,19 @@ impl Scene {
         assert!(scale > 0.0 && scale.is_finite(), "texture scale {scale}");
         let t = &mut self.textures[surface as usize];
         *t = t.scaled(scale);
+    }
+
+    /// Multiplies the texture contrast of every surface by `factor` (0 < factor ≤ 1:
+    /// weaker texture, down to blank walls; the per-face shading stays, so the edges
+    /// between faces still show).
+    ///
+    /// # Panics
+    /// If `factor` is not in (0, 1].
+    pub fn scale_contrast(&mut self, factor: f64) {
+        assert!(factor > 0.0 && factor <= 1.0, "texture contrast {factor}");
+        for t in &mut self.textures {
+            *t = t.with_contrast(factor);
+        }
     }
 
     /// Lower corner of the room.
