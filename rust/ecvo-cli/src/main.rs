@@ -51,7 +51,9 @@ enum Command {
         /// Reference levels overriding the preset's, e.g. "30mm:7deg,120mm:12deg".
         #[arg(long, allow_hyphen_values = true)]
         levels: Option<String>,
-        /// Switch the bilateral depth filter off.
+        /// Switch the bilateral depth filter off. With the phone preset keep the
+        /// contour filter off too (--no-contour-filter): at its 20° it reads raw depth
+        /// noise as depth edges and removes nearly every pixel.
         #[arg(long)]
         no_bilateral: bool,
         /// Switch the normal-based removal filter off.
@@ -308,6 +310,13 @@ fn dispatch(command: Command) -> Result<()> {
                 ModeArg::L1 => Mode::L1,
                 ModeArg::L2 => Mode::L2,
             };
+            if no_bilateral && !no_contour_filter && matches!(track.preset, PresetArg::Phone) {
+                eprintln!(
+                    "warning: --no-bilateral with the phone preset's contour filter (20°): on \
+                     raw depth the contour test reads the noise as depth edges and removes nearly \
+                     every pixel (frames lost as failed_toofewpixels); add --no-contour-filter"
+                );
+            }
             let settings = TrackSettings {
                 levels,
                 bilateral: !no_bilateral,

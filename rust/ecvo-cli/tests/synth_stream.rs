@@ -88,6 +88,31 @@ fn l1_levels_override_and_filter_flags() {
     check_files(&out, &s);
 }
 
+#[test]
+fn no_bilateral_with_the_phone_contour_filter_warns_and_loses_the_stream() {
+    // Documented pitfall: with the phone preset (contour angle 20°) the contour test,
+    // fed raw phone-noise depth, removes nearly every pixel, so every frame after the
+    // first is lost; the CLI says so before tracking. The pc preset's 7° tracks
+    // without the bilateral filter (the test above, and `--no-bilateral` alone).
+    let out = temp_dir("no-bilateral");
+    let seq = testdata_stream();
+    let o = run_ok(&[
+        "run",
+        seq.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--no-bilateral",
+        "--preset",
+        "phone",
+        "--max-frames",
+        "10",
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("--no-contour-filter"), "{stderr}");
+    let s = summary(&out);
+    assert_eq!(s["lost_frames"].as_u64(), Some(9), "{s}");
+}
+
 /// The pipeline is deterministic: one and two compute threads give the same bytes
 /// in every output but the timings (and the same as the default, two).
 #[test]
