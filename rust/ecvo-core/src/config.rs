@@ -192,6 +192,12 @@ pub struct MotionConfig {
     /// The same for the depth residuals: `√Σ_ZZ / λ` in metres (at 1 m with the
     /// quadratic noise model).
     pub max_depth_sigma_m: f64,
+    /// A current frame with fewer textured pixels (depth and an intensity gradient of
+    /// at least [`crate::prepare::TEXTURE_GRADIENT`]) than this fraction of its pixels
+    /// registers on depth alone: its intensity residuals have no gradient, so they
+    /// add nothing to the normal equations, and their spread is not checked against
+    /// `max_intensity_sigma` (a black or dark frame, the lights off, with depth).
+    pub depth_only_texture_fraction: f64,
 }
 
 impl MotionConfig {
@@ -296,6 +302,7 @@ impl Config {
                 prior: MotionPrior::ConstantVelocity,
                 max_intensity_sigma: 0.2,
                 max_depth_sigma_m: 0.05,
+                depth_only_texture_fraction: 0.02,
             },
             reference_levels: levels[..used].to_vec(),
             max_lost_frames: 10,
@@ -436,6 +443,12 @@ impl Config {
             return bad(
                 "motion.max_intensity_sigma/max_depth_sigma_m",
                 "must be positive".into(),
+            );
+        }
+        if !(0.0..=1.0).contains(&m.depth_only_texture_fraction) {
+            return bad(
+                "motion.depth_only_texture_fraction",
+                format!("{} is not in [0, 1]", m.depth_only_texture_fraction),
             );
         }
         if !(m.max_translation_m > 0.0 && m.max_rotation_deg > 0.0) {

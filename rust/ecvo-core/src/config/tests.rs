@@ -107,6 +107,20 @@ fn validate_rejects_bad_fields() {
             "{jump} accepted"
         );
     }
+    for fraction in [-0.1, 1.5, f64::NAN] {
+        let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+        c.motion.depth_only_texture_fraction = fraction;
+        assert!(
+            matches!(
+                c.validate(),
+                Err(Error::InvalidConfig {
+                    field: "motion.depth_only_texture_fraction",
+                    ..
+                })
+            ),
+            "{fraction} accepted"
+        );
+    }
     let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
     c.max_spread_jump = f64::INFINITY;
     assert!(c.validate().is_ok(), "infinity switches the check off");

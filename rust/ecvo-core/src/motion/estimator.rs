@@ -194,7 +194,7 @@ pub(super) fn motion_from<K: Loops>(
     {
         Status::Failed(Failure::TooLarge)
     } else if check.is_some_and(|s| {
-        s.ii.sqrt() > cfg.max_intensity_sigma
+        (s.ii.sqrt() > cfg.max_intensity_sigma && textured(fi, cfg))
             || s.zz.sqrt() > cfg.max_depth_sigma_m * cfg.depth_gain.max(1e-9)
     }) {
         Status::Failed(Failure::Inconsistent)
@@ -207,6 +207,13 @@ pub(super) fn motion_from<K: Loops>(
         result.pose = pose;
     }
     result
+}
+
+/// True when the current frame `fi` has enough texture for its photometric spread to
+/// be checked ([`MotionConfig::depth_only_texture_fraction`]).
+fn textured(fi: &PreparedFrame, cfg: &MotionConfig) -> bool {
+    let pixels = fi.levels.first().map_or(0, |l| l.samples.len());
+    fi.textured_pixels as f64 >= cfg.depth_only_texture_fraction * pixels as f64
 }
 
 /// Runs the first step from every guess and keeps the best (see
