@@ -143,20 +143,26 @@ impl FrameView<'_> {
     }
 }
 
+/// The TUM fr1 camera at half resolution (320x240): the unit tests' camera.
+#[cfg(test)]
+pub(crate) fn tum_fr1_half() -> Camera {
+    Camera {
+        width: 320,
+        height: 240,
+        fx: 258.65,
+        fy: 258.25,
+        cx: 159.05,
+        cy: 127.4,
+        depth_scale: 5000.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn cam() -> Camera {
-        Camera {
-            width: 320,
-            height: 240,
-            fx: 258.65,
-            fy: 258.25,
-            cx: 159.05,
-            cy: 127.4,
-            depth_scale: 5000.0,
-        }
+        tum_fr1_half()
     }
 
     #[test]

@@ -521,15 +521,12 @@ pub fn parse_levels(s: &str) -> Result<Vec<ReferenceLevel>> {
         field: "levels",
         why,
     };
-    let s = s.trim();
-    if s.is_empty() || s.eq_ignore_ascii_case("none") {
-        return Ok(Vec::new());
-    }
-    s.split(',')
-        .map(|pair| {
-            let (d, a) = pair
-                .split_once(':')
-                .ok_or_else(|| bad(format!("`{pair}` is not DISTANCE:ANGLE, e.g. 30mm:7deg")))?;
+    parse_pairs(
+        s,
+        ':',
+        "DISTANCE:ANGLE, e.g. 30mm:7deg",
+        &bad,
+        |pair, d, a| {
             let d = d.trim();
             let dist = if let Some(v) = d.strip_suffix("mm") {
                 v.trim().parse::<f64>().map(|x| x / 1000.0)
@@ -554,6 +551,30 @@ pub fn parse_levels(s: &str) -> Result<Vec<ReferenceLevel>> {
                 max_distance_m: dist,
                 max_angle_deg: ang,
             })
+        },
+    )
+}
+
+/// The comma-separated `LEFT<sep>RIGHT` pairs of `s`, each parsed by `each(pair,
+/// left, right)`; an empty string or `none` gives no pair. A piece without `sep` is
+/// refused with `bad("`piece` is not FORM")`.
+pub(crate) fn parse_pairs<T>(
+    s: &str,
+    sep: char,
+    form: &str,
+    bad: &impl Fn(String) -> Error,
+    mut each: impl FnMut(&str, &str, &str) -> Result<T>,
+) -> Result<Vec<T>> {
+    let s = s.trim();
+    if s.is_empty() || s.eq_ignore_ascii_case("none") {
+        return Ok(Vec::new());
+    }
+    s.split(',')
+        .map(|pair| {
+            let (left, right) = pair
+                .split_once(sep)
+                .ok_or_else(|| bad(format!("`{pair}` is not {form}")))?;
+            each(pair, left, right)
         })
         .collect()
 }

@@ -113,6 +113,33 @@ fn plausible_speed(motion: &Pose, dt: f64, max_speed: f64) -> bool {
     !(dt > 0.0) || motion.translation.vector.norm() <= max_speed * dt + SPEED_SLACK_M
 }
 
+/// Whether a registration `r` ([A] or a recovery) by which the camera moved `moved`
+/// from the previous frame, `dt` seconds before, is believed: the speed stays under
+/// [`Config::max_speed_m_s`], and its intensity and depth residuals do not both spread
+/// more than [`Config::max_spread_jump`] times wider than the recent [A]s' (checked
+/// with bivariate weighting only, the one that estimates the two spreads apart). A
+/// refusal is counted (`implausible_motions`, `spread_jumps`).
+fn believable(
+    config: &Config,
+    spread: &SpreadWatch,
+    counters: &mut Counters,
+    r: &MotionResult,
+    moved: &Pose,
+    dt: f64,
+) -> bool {
+    if !plausible_speed(moved, dt, config.max_speed_m_s) {
+        counters.implausible_motions += 1;
+        return false;
+    }
+    let jumped = config.motion.weighting == Weighting::Bivariate
+        && r.scale
+            .is_some_and(|s| spread.is_jump(&s, config.max_spread_jump));
+    if jumped {
+        counters.spread_jumps += 1;
+    }
+    !jumped
+}
+
 /// After this many refused (failed or rejected) corrections in a row against the
 /// same reference, the next frame that calls for a correction at that level becomes
 /// its reference without one: the old reference is out of reach.
@@ -308,17 +335,15 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         out.frame_to_frame = Some(f2f);
         let predicted = prior.map_or(Pose::identity(), |p| se3::compose(&prev.pose, &p));
         let dt = frame.timestamp - prev.frame.timestamp;
-        let believed = f2f.is_ok() && {
-            let ok = plausible_speed(&f2f.pose, dt, self.config.max_speed_m_s);
-            if !ok {
-                self.counters.implausible_motions += 1;
-            }
-            let jumped = ok && self.spread_jumped(&f2f);
-            if jumped {
-                self.counters.spread_jumps += 1;
-            }
-            ok && !jumped
-        };
+        let believed = f2f.is_ok()
+            && believable(
+                &self.config,
+                &self.spread,
+                &mut self.counters,
+                &f2f,
+                &f2f.pose,
+                dt,
+            );
         let mut pose = if believed {
             if let Some(s) = &f2f.scale {
                 self.spread.record(s);
@@ -429,12 +454,14 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             if r.is_ok() {
                 let pose = se3::compose(&reference.pose, &r.pose);
                 let moved = se3::compose(&prev_pose.inverse(), &pose);
-                if !plausible_speed(&moved, dt, self.config.max_speed_m_s) {
-                    self.counters.implausible_motions += 1;
-                    continue;
-                }
-                if self.spread_jumped(&r) {
-                    self.counters.spread_jumps += 1;
+                if !believable(
+                    &self.config,
+                    &self.spread,
+                    &mut self.counters,
+                    &r,
+                    &moved,
+                    dt,
+                ) {
                     continue;
                 }
                 self.counters.recovered_frames += 1;
@@ -486,16 +513,6 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         self.velocity = None;
         self.spread.clear();
         self.prev = Some(Kept { frame, pose, index });
-    }
-
-    /// True when `r`'s intensity and depth residuals both spread more than
-    /// [`Config::max_spread_jump`] times wider than the recent [A]s'. Only bivariate
-    /// weighting estimates the two spreads apart; with scalar weighting the check is
-    /// off.
-    fn spread_jumped(&self, r: &MotionResult) -> bool {
-        self.config.motion.weighting == Weighting::Bivariate
-            && r.scale
-                .is_some_and(|s| self.spread.is_jump(&s, self.config.max_spread_jump))
     }
 }
 

@@ -132,30 +132,21 @@ pub fn parse_point_budget(s: &str) -> Result<Vec<(usize, Option<usize>)>> {
         field: "point_budget",
         why,
     };
-    let s = s.trim();
-    if s.is_empty() || s.eq_ignore_ascii_case("none") {
-        return Ok(Vec::new());
-    }
-    s.split(',')
-        .map(|pair| {
-            let (l, n) = pair
-                .split_once('=')
-                .ok_or_else(|| bad(format!("`{pair}` is not LEVEL=POINTS, e.g. 0=4096")))?;
-            let level = l
-                .trim()
-                .parse::<usize>()
-                .map_err(|_| bad(format!("`{pair}`: level `{l}` is not a whole number")))?;
-            let n = n.trim();
-            let points = if n.eq_ignore_ascii_case("all") {
-                None
-            } else {
-                Some(n.parse::<usize>().map_err(|_| {
-                    bad(format!(
-                        "`{pair}`: points `{n}` is not a whole number or all"
-                    ))
-                })?)
-            };
-            Ok((level, points))
-        })
-        .collect()
+    super::parse_pairs(s, '=', "LEVEL=POINTS, e.g. 0=4096", &bad, |pair, l, n| {
+        let level = l
+            .trim()
+            .parse::<usize>()
+            .map_err(|_| bad(format!("`{pair}`: level `{l}` is not a whole number")))?;
+        let n = n.trim();
+        let points = if n.eq_ignore_ascii_case("all") {
+            None
+        } else {
+            Some(n.parse::<usize>().map_err(|_| {
+                bad(format!(
+                    "`{pair}`: points `{n}` is not a whole number or all"
+                ))
+            })?)
+        };
+        Ok((level, points))
+    })
 }

@@ -1,15 +1,7 @@
 use super::*;
 
 fn cam() -> Camera {
-    Camera {
-        width: 320,
-        height: 240,
-        fx: 258.65,
-        fy: 258.25,
-        cx: 159.05,
-        cy: 127.4,
-        depth_scale: 5000.0,
-    }
+    crate::camera::tum_fr1_half()
 }
 
 #[test]
