@@ -191,6 +191,10 @@ struct TrackArgs {
     /// (mean change of the whitened squared residuals; `inf` accepts all).
     #[arg(long)]
     max_correction_distance: Option<f64>,
+    /// At the finest step, the depth residual weighs at most this many times the
+    /// photometric one under bivariate weighting (`inf` leaves the fit alone).
+    #[arg(long)]
+    max_fine_depth_weight: Option<f64>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -245,6 +249,7 @@ impl TrackArgs {
                 PriorArg::Velocity => MotionPrior::ConstantVelocity,
             }),
             max_correction_distance: self.max_correction_distance,
+            max_fine_depth_weight: self.max_fine_depth_weight,
         };
         TrackSettings {
             frame_step: self.frame_step as usize,

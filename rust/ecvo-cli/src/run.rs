@@ -63,6 +63,8 @@ pub struct EngineChoice {
     pub prior: Option<ecvo_core::MotionPrior>,
     /// Correction gate.
     pub max_correction_distance: Option<f64>,
+    /// Cap on the depth residual's weight at the finest step.
+    pub max_fine_depth_weight: Option<f64>,
 }
 
 impl EngineChoice {
@@ -96,6 +98,12 @@ impl EngineChoice {
             match m.fine_weighting {
                 Some(f) if f != m.weighting =>
                     format!("{:?} then {:?} at the finest step", m.weighting, f),
+                _ if m.weighting == ecvo_core::Weighting::Bivariate
+                    && m.max_fine_depth_weight.is_finite() =>
+                    format!(
+                        "bivariate (depth at most {}x at the finest step)",
+                        m.max_fine_depth_weight
+                    ),
                 _ => format!("{:?}", m.weighting),
             },
             m.depth_noise,
@@ -182,6 +190,9 @@ impl TrackSettings {
         }
         if let Some(d) = e.max_correction_distance {
             config.max_correction_distance = d;
+        }
+        if let Some(d) = e.max_fine_depth_weight {
+            config.motion.max_fine_depth_weight = d;
         }
         if let Some(text) = &self.levels {
             config.reference_levels =

@@ -179,6 +179,15 @@ pub struct MotionConfig {
     /// residuals). Bivariate coarse steps and a scalar finest step is `hybrid` on the
     /// command line.
     pub fine_weighting: Option<Weighting>,
+    /// At the finest step, the (gain-scaled) depth residual weighs at most this many
+    /// times the photometric one: the bivariate scale is whitened with `Σ_ZZ` at least
+    /// `Σ_II / max_fine_depth_weight` (the fit itself is unchanged). The fit treats
+    /// every pixel as independent, but depth residuals of neighbouring pixels are not
+    /// (the sensor's and the bilateral filter's smoothing, disparity quantisation), so
+    /// on real Kinect data it gives depth too much of the final say. The coarse steps
+    /// keep the plain fit, which the basin needs. `f64::INFINITY` switches it off; no
+    /// effect with scalar weighting.
+    pub max_fine_depth_weight: f64,
     /// How the depth residual's noise grows with depth.
     pub depth_noise: DepthNoiseModel,
     /// What [A] starts from.
@@ -298,6 +307,7 @@ impl Config {
                 max_rotation_deg: 45.0,
                 weighting: Weighting::Bivariate,
                 fine_weighting: None,
+                max_fine_depth_weight: 4.0,
                 depth_noise: DepthNoiseModel::Quadratic,
                 prior: MotionPrior::ConstantVelocity,
                 max_intensity_sigma: 0.2,
@@ -324,6 +334,7 @@ impl Config {
         c.motion.scale_tolerance = 1e-3;
         c.motion.weighting = Weighting::Scalar;
         c.motion.depth_noise = DepthNoiseModel::Constant;
+        c.motion.max_fine_depth_weight = f64::INFINITY;
         c.motion.prior = MotionPrior::Identity;
         c.max_correction_distance = f64::INFINITY;
         c.max_speed_m_s = f64::INFINITY;
@@ -443,6 +454,12 @@ impl Config {
             return bad(
                 "motion.max_intensity_sigma/max_depth_sigma_m",
                 "must be positive".into(),
+            );
+        }
+        if !(m.max_fine_depth_weight > 0.0) {
+            return bad(
+                "motion.max_fine_depth_weight",
+                format!("{} is not positive", m.max_fine_depth_weight),
             );
         }
         if !(0.0..=1.0).contains(&m.depth_only_texture_fraction) {

@@ -56,8 +56,15 @@ impl Scale {
     /// The whitening factor `L` with `Σ⁻¹ = Lᵀ L` (upper triangular), in f32 for the
     /// per-pixel loops. A near-singular Σ is regularised by bounding the correlation.
     pub fn whitener(&self, nu: f32) -> Whitener {
+        self.whitener_with(nu, 0.0)
+    }
+
+    /// [`Scale::whitener`] with `Σ_ZZ` raised to at least `zz_floor · Σ_II`: the
+    /// depth residual then weighs at most `1 / zz_floor` times the photometric one
+    /// (`MotionConfig::max_fine_depth_weight`). The fit itself is not changed.
+    pub fn whitener_with(&self, nu: f32, zz_floor: f64) -> Whitener {
         let ii = self.ii.max(1e-12);
-        let zz = self.zz.max(1e-12);
+        let zz = self.zz.max(1e-12).max(zz_floor * ii);
         // |ρ| ≤ 0.95 keeps Σ well conditioned.
         let lim = 0.95 * (ii * zz).sqrt();
         let iz = self.iz.clamp(-lim, lim);
@@ -377,6 +384,28 @@ mod tests {
         assert!((w - 7.0 / 7.0).abs() < 1e-6);
         let (d2, w) = wh.weigh(0.1, f32::NAN);
         assert!((d2 - 1.0).abs() < 1e-5 && (w - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn the_depth_weight_cap_raises_only_a_small_depth_spread() {
+        // Depth residuals 10x tighter than the photometric ones: uncapped, a depth
+        // residual weighs 100x a photometric one of the same size; capped at 3x, Σ_ZZ is
+        // whitened as Σ_II / 3.
+        let s = Scale {
+            ii: 1e-4,
+            iz: 0.0,
+            zz: 1e-6,
+        };
+        let (d2, _) = s.whitener(5.0).weigh(0.0, 0.01);
+        assert!((d2 - 100.0).abs() < 1e-2, "{d2}");
+        let capped = s.whitener_with(5.0, 1.0 / 3.0);
+        let (d2, _) = capped.weigh(0.0, 0.01);
+        assert!((d2 - 3.0).abs() < 1e-4, "{d2}");
+        let (d2, _) = capped.weigh(0.01, f32::NAN);
+        assert!((d2 - 1.0).abs() < 1e-5, "{d2}");
+        // A depth spread already above the floor is left alone.
+        let wide = Scale { zz: 1e-3, ..s };
+        assert_eq!(wide.whitener(5.0), wide.whitener_with(5.0, 1.0 / 3.0));
     }
 
     #[test]

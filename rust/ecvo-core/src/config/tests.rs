@@ -113,9 +113,24 @@ fn validate_rejects_bad_fields() {
             "{fraction} accepted"
         );
     }
+    for weight in [0.0, -1.0, f64::NAN] {
+        let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+        c.motion.max_fine_depth_weight = weight;
+        assert!(
+            matches!(
+                c.validate(),
+                Err(Error::InvalidConfig {
+                    field: "motion.max_fine_depth_weight",
+                    ..
+                })
+            ),
+            "{weight} accepted"
+        );
+    }
     let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
     c.max_spread_jump = f64::INFINITY;
-    assert!(c.validate().is_ok(), "infinity switches the check off");
+    c.motion.max_fine_depth_weight = f64::INFINITY;
+    assert!(c.validate().is_ok(), "infinity switches the checks off");
 }
 
 #[test]

@@ -60,6 +60,9 @@ pub(super) struct Params {
     pub(super) quadratic_noise: bool,
     /// [`MotionConfig::scale_tolerance`].
     pub(super) scale_tolerance: f64,
+    /// `Σ_ZZ` is whitened as at least this times `Σ_II` (0 at every step but the
+    /// finest, `1 / MotionConfig::max_fine_depth_weight` there).
+    pub(super) zz_floor: f64,
 }
 
 impl Params {
@@ -70,7 +73,13 @@ impl Params {
             weighting: cfg.weighting,
             quadratic_noise: cfg.depth_noise == DepthNoiseModel::Quadratic,
             scale_tolerance: cfg.scale_tolerance,
+            zz_floor: 0.0,
         }
+    }
+
+    /// The whitener of `s` under these parameters.
+    fn whitener(&self, s: &Scale) -> Whitener {
+        s.whitener_with(self.nu, self.zz_floor)
     }
 }
 
@@ -143,6 +152,10 @@ pub(super) fn motion_from<K: Loops>(
                 fine_level = Some(level);
                 Params { weighting, ..p }
             }
+            _ if k == finest => Params {
+                zz_floor: 1.0 / cfg.max_fine_depth_weight,
+                ..p
+            },
             _ => p,
         };
         let start = if fine_level.is_some() { None } else { scale };
@@ -237,7 +250,7 @@ fn best_start<K: Loops>(
     let Some(common) = outs.clone().find_map(|o| o.scale) else {
         return (0, slots[0].expect("at least one start"));
     };
-    let wh = common.whitener(p.nu);
+    let wh = p.whitener(&common);
     let total = points.max(1) as f64;
     let mut best = (0, f64::INFINITY);
     for (k, o) in outs.enumerate() {
@@ -285,7 +298,7 @@ fn run_step<K: Loops>(
     let Some(mut scale) = fit_scale(lp, p, start) else {
         return out;
     };
-    let mut wh = scale.whitener(p.nu);
+    let mut wh = p.whitener(&scale);
     let mut cost = lp.cost(&wh) / n as f64;
     out.hit_max = true;
     for it in 0..step.max_iterations {
@@ -312,7 +325,7 @@ fn run_step<K: Loops>(
         n = m;
         if let Some(s) = fit_scale(lp, p, Some(scale)) {
             scale = s;
-            wh = scale.whitener(p.nu);
+            wh = p.whitener(&scale);
         }
         cost = lp.cost(&wh) / n as f64;
         let small = delta.fixed_rows::<3>(0).norm() < cfg.min_update
@@ -338,7 +351,7 @@ fn fit_scale<K: Loops>(lp: &mut K, p: &Params, start: Option<Scale>) -> Option<S
         _ => scale::next_scale(&lp.moments(p.weighting), two, one, p.weighting)?,
     };
     for _ in 0..MAX_SCALE_PASSES {
-        let total = lp.pass(&s.whitener(p.nu), p.weighting);
+        let total = lp.pass(&p.whitener(&s), p.weighting);
         let next = scale::next_scale(&total, two, one, p.weighting)?;
         let done = scale::settled(&s, &next, p.scale_tolerance);
         s = next;

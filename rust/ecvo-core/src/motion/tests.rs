@@ -57,6 +57,7 @@ fn params(weighting: Weighting, quadratic_noise: bool) -> Params {
         weighting,
         quadratic_noise,
         scale_tolerance: 1e-3,
+        zz_floor: 0.0,
     }
 }
 
