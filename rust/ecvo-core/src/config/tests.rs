@@ -4,6 +4,18 @@ fn cam() -> Camera {
     crate::camera::tum_fr1_half()
 }
 
+/// Asserts that `validate` names `field` for each of `values` set by `set`.
+fn rejected(field: &str, values: &[f64], set: impl Fn(&mut Config, f64)) {
+    for &v in values {
+        let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+        set(&mut c, v);
+        match c.validate() {
+            Err(Error::InvalidConfig { field: f, .. }) => assert_eq!(f, field, "{v}"),
+            other => panic!("{field} = {v} gave {other:?}"),
+        }
+    }
+}
+
 #[test]
 fn presets_carry_the_papers_values() {
     let pc = Config::new(cam(), Preset::Pc, Mode::L2);
@@ -85,48 +97,19 @@ fn validate_rejects_bad_fields() {
             ..
         })
     ));
-    for jump in [1.0, 0.5, f64::NAN] {
-        let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
-        c.max_spread_jump = jump;
-        assert!(
-            matches!(
-                c.validate(),
-                Err(Error::InvalidConfig {
-                    field: "max_spread_jump",
-                    ..
-                })
-            ),
-            "{jump} accepted"
-        );
-    }
-    for fraction in [-0.1, 1.5, f64::NAN] {
-        let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
-        c.motion.depth_only_texture_fraction = fraction;
-        assert!(
-            matches!(
-                c.validate(),
-                Err(Error::InvalidConfig {
-                    field: "motion.depth_only_texture_fraction",
-                    ..
-                })
-            ),
-            "{fraction} accepted"
-        );
-    }
-    for weight in [0.0, -1.0, f64::NAN] {
-        let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
-        c.motion.max_fine_depth_weight = weight;
-        assert!(
-            matches!(
-                c.validate(),
-                Err(Error::InvalidConfig {
-                    field: "motion.max_fine_depth_weight",
-                    ..
-                })
-            ),
-            "{weight} accepted"
-        );
-    }
+    rejected("max_spread_jump", &[1.0, 0.5, f64::NAN], |c, v| {
+        c.max_spread_jump = v
+    });
+    rejected(
+        "motion.depth_only_texture_fraction",
+        &[-0.1, 1.5, f64::NAN],
+        |c, v| c.motion.depth_only_texture_fraction = v,
+    );
+    rejected(
+        "motion.max_fine_depth_weight",
+        &[0.0, -1.0, f64::NAN],
+        |c, v| c.motion.max_fine_depth_weight = v,
+    );
     let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
     c.max_spread_jump = f64::INFINITY;
     c.motion.max_fine_depth_weight = f64::INFINITY;
