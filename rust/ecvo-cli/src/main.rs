@@ -195,6 +195,16 @@ struct TrackArgs {
     /// photometric one under bivariate weighting (`inf` leaves the fit alone).
     #[arg(long)]
     max_fine_depth_weight: Option<f64>,
+    /// What an accepted correction does to the frame-to-frame chain: fuse (weighed by
+    /// their covariances) or replace (the paper's).
+    #[arg(long, value_enum)]
+    corrections: Option<CorrectionsArg>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum CorrectionsArg {
+    Fuse,
+    Replace,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -250,6 +260,7 @@ impl TrackArgs {
             }),
             max_correction_distance: self.max_correction_distance,
             max_fine_depth_weight: self.max_fine_depth_weight,
+            fuse_corrections: self.corrections.map(|c| matches!(c, CorrectionsArg::Fuse)),
         };
         TrackSettings {
             frame_step: self.frame_step as usize,

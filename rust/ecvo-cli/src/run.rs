@@ -65,6 +65,8 @@ pub struct EngineChoice {
     pub max_correction_distance: Option<f64>,
     /// Cap on the depth residual's weight at the finest step.
     pub max_fine_depth_weight: Option<f64>,
+    /// Fuse corrections with the chain (true) or replace it (false).
+    pub fuse_corrections: Option<bool>,
 }
 
 impl EngineChoice {
@@ -94,7 +96,7 @@ impl EngineChoice {
             |s| s.name().to_string(),
         );
         format!(
-            "schedule {schedule}, {} weighting, {:?} depth noise, {:?} prior, correction gate {}",
+            "schedule {schedule}, {} weighting, {:?} depth noise, {:?} prior, correction gate {}, corrections {}",
             match m.fine_weighting {
                 Some(f) if f != m.weighting =>
                     format!("{:?} then {:?} at the finest step", m.weighting, f),
@@ -108,7 +110,8 @@ impl EngineChoice {
             },
             m.depth_noise,
             m.prior,
-            config.max_correction_distance
+            config.max_correction_distance,
+            if config.fuse_corrections { "fused" } else { "replace" }
         )
         .to_lowercase()
     }
@@ -193,6 +196,9 @@ impl TrackSettings {
         }
         if let Some(d) = e.max_fine_depth_weight {
             config.motion.max_fine_depth_weight = d;
+        }
+        if let Some(f) = e.fuse_corrections {
+            config.fuse_corrections = f;
         }
         if let Some(text) = &self.levels {
             config.reference_levels =

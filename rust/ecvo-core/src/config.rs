@@ -253,6 +253,11 @@ pub struct Config {
     /// [`crate::spread`]): no rigid motion explains the two frames. Checked with
     /// bivariate weighting only. `f64::INFINITY` switches it off.
     pub max_spread_jump: f64,
+    /// Fuse an accepted correction with the frame-to-frame chain it corrects,
+    /// weighing each by its covariance ([`crate::tracker::fuse_correction`]), instead
+    /// of replacing the chain's pose with the correction's as the paper does. Off in
+    /// [`Config::paper`].
+    pub fuse_corrections: bool,
     /// A frame becomes an anchor after a loss only with at least this fraction of
     /// its pixels carrying depth after filtering.
     pub min_anchor_depth_fraction: f64,
@@ -319,6 +324,7 @@ impl Config {
             max_correction_distance: 100.0,
             max_speed_m_s: 4.0,
             max_spread_jump: 5.0,
+            fuse_corrections: true,
             min_anchor_depth_fraction: 0.05,
             min_anchor_texture_fraction: 0.02,
         }
@@ -339,6 +345,7 @@ impl Config {
         c.max_correction_distance = f64::INFINITY;
         c.max_speed_m_s = f64::INFINITY;
         c.max_spread_jump = f64::INFINITY;
+        c.fuse_corrections = false;
         c.motion.max_intensity_sigma = f64::INFINITY;
         c.motion.max_depth_sigma_m = f64::INFINITY;
         c

@@ -16,6 +16,7 @@
 
 pub mod camera;
 pub mod config;
+pub mod correction;
 pub mod error;
 pub mod motion;
 pub mod prepare;

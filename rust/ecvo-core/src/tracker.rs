@@ -12,8 +12,11 @@ use std::ops::Deref;
 use std::sync::Arc;
 
 use crate::Pose;
+use nalgebra::Matrix6;
+
 use crate::camera::{Camera, FrameView};
 use crate::config::{Config, MotionPrior, ReferenceLevel, Weighting};
+pub use crate::correction::{correction_distance, fuse_correction};
 use crate::error::Result;
 use crate::motion::{MotionEstimator, MotionResult};
 use crate::prepare::{PreparedFrame, Preparer};
@@ -172,17 +175,6 @@ pub fn predict(v: &Velocity, dt: f64) -> Option<Pose> {
     (se3::is_finite(&p) && xi.iter().any(|x| *x != 0.0)).then_some(p)
 }
 
-/// How far a correction's result lies from its initial guess, in the metric of its
-/// information matrix: `δᵀ H δ / n`, the mean change of the whitened squared residuals
-/// (units of the residuals' variance) that the move from guess to result makes, for
-/// the twist δ between them and `n` residuals.
-pub fn correction_distance(init: &Pose, r: &MotionResult) -> f64 {
-    // MOTION moves T_{j→i} = pose⁻¹ by left perturbations: exp(δ) = pose⁻¹ · init.
-    let delta = se3::log(&se3::compose(&r.pose.inverse(), init));
-    let n = r.valid_pixels.max(1) as f64;
-    (delta.transpose() * r.information * delta)[(0, 0)] / n
-}
-
 /// A frame the tracker keeps, with its pose.
 #[derive(Clone, Debug)]
 pub struct Kept<F> {
@@ -211,6 +203,10 @@ pub struct Tracker<F> {
     refused: Vec<u32>,
     /// Residual spreads of the last believed [A]s.
     spread: SpreadWatch,
+    /// Covariance of the motion chained frame to frame since each level's reference
+    /// (the sum of the believed [A]s' inverse information matrices; `None` after a
+    /// recovery or a loss, when the chain is broken): [`fuse_correction`].
+    chain: Vec<Option<Matrix6<f64>>>,
 }
 
 impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
@@ -232,6 +228,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             velocity: None,
             refused: vec![0; levels],
             spread: SpreadWatch::default(),
+            chain: vec![None; levels],
             config,
         })
     }
@@ -369,6 +366,17 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         };
         self.lost_run = 0;
         self.state = TrackingState::Tracking;
+        let add = if believed {
+            f2f.information.try_inverse()
+        } else {
+            None
+        };
+        for c in &mut self.chain {
+            *c = match (*c, add) {
+                (Some(c), Some(a)) => Some(c + a),
+                _ => None,
+            };
+        }
 
         // [B], [C], ...: correct against each level's reference while the motion
         // accumulated since it is large enough. A correction that fails, or lands
@@ -401,6 +409,12 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
                 self.counters.rejected_corrections += 1;
             } else {
                 pose = se3::compose(&reference.pose, &r.pose);
+                if self.config.fuse_corrections
+                    && let Some(chain) = &self.chain[k]
+                    && let Some(fused) = fuse_correction(&accumulated, chain, &r)
+                {
+                    pose = se3::compose(&reference.pose, &fused);
+                }
                 self.counters.references[k] += 1;
                 self.refused[k] = 0;
                 became = k + 1;
@@ -409,6 +423,9 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             self.refused[k] += 1;
             out.refused_corrections += 1;
             break;
+        }
+        for c in &mut self.chain[..became] {
+            *c = Some(Matrix6::zeros());
         }
         for (r, refused) in self.refs[..became].iter_mut().zip(&mut self.refused) {
             *r = Some(Kept {
@@ -475,6 +492,9 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
     /// The frame did not register: it keeps the last good pose; after too many in a
     /// row the tracker starts afresh at a frame good enough to anchor on.
     fn lose(&mut self, frame: F, index: u64, mut out: FrameOutput) -> FrameOutput {
+        for c in &mut self.chain {
+            *c = None;
+        }
         let last_pose = self.prev.as_ref().map_or(Pose::identity(), |p| p.pose);
         self.counters.lost_frames += 1;
         self.lost_run += 1;
@@ -500,6 +520,9 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
 
     /// Makes `frame` the previous frame and the reference at every level.
     fn anchor(&mut self, frame: F, pose: Pose, index: u64) {
+        for c in &mut self.chain {
+            *c = Some(Matrix6::zeros());
+        }
         for r in &mut self.refs {
             *r = Some(Kept {
                 frame: frame.clone(),
