@@ -15,8 +15,8 @@ use crate::se3;
 /// by their covariances as a Kalman update does: the result moved towards the guess by
 /// `K = Σ_result (Σ_result + Σ_chain)⁻¹` in MOTION's tangent space. A chain of few,
 /// well-constrained [A]s keeps most of its own estimate; a long one takes the direct
-/// registration. The covariances are summed without transporting them along the chain
-/// (the motions between references are small). `None` when a matrix is singular.
+/// registration. `chain` is kept in the current camera's coordinates by
+/// [`chain_step`]. `None` when a matrix is singular.
 pub fn fuse_correction(guess: &Pose, chain: &Matrix6<f64>, result: &MotionResult) -> Option<Pose> {
     let corr = result.information.try_inverse()?;
     let gain = corr * (corr + chain).try_inverse()?;
@@ -25,6 +25,26 @@ pub fn fuse_correction(guess: &Pose, chain: &Matrix6<f64>, result: &MotionResult
     let t = se3::compose(&se3::exp(&(gain * delta)), &result.pose.inverse());
     let fused = t.inverse();
     se3::is_finite(&fused).then_some(fused)
+}
+
+/// The chain's covariance one [A] on: `Ad · chain · Adᵀ + step`, the earlier
+/// frames' uncertainty carried into the current camera's coordinates (MOTION's
+/// perturbations act there) by the adjoint of `T_{p→c} = motion⁻¹`, plus the new
+/// [A]'s (`motion` is its `T_{c,p}`, `step` the inverse of its information matrix).
+pub fn chain_step(chain: &Matrix6<f64>, motion: &Pose, step: &Matrix6<f64>) -> Matrix6<f64> {
+    let ad = adjoint(&motion.inverse());
+    ad * chain * ad.transpose() + step
+}
+
+/// The adjoint of `t` on twists `[v; ω]`: `[[R, [t]×R], [0, R]]`.
+pub fn adjoint(t: &Pose) -> Matrix6<f64> {
+    let r = t.rotation.to_rotation_matrix().into_inner();
+    let tr = se3::hat(&t.translation.vector) * r;
+    let mut a = Matrix6::zeros();
+    a.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+    a.fixed_view_mut::<3, 3>(0, 3).copy_from(&tr);
+    a.fixed_view_mut::<3, 3>(3, 3).copy_from(&r);
+    a
 }
 
 /// How far a correction's result lies from its initial guess, in the metric of its
@@ -80,6 +100,19 @@ mod tests {
         assert!(close(&kept, &guess, 1e-6), "{kept:?}");
         let taken = fuse_correction(&guess, &(Matrix6::identity() * 1e3), &r).unwrap();
         assert!(close(&taken, &measured, 1e-6), "{taken:?}");
+    }
+
+    #[test]
+    fn the_adjoint_moves_a_perturbation_across_a_pose() {
+        // exp(Ad(T) ξ) = T exp(ξ) T⁻¹.
+        let t = pose(0.3, 0.4);
+        let xi = crate::se3::Twist::new(0.01, -0.02, 0.03, 0.002, 0.001, -0.003);
+        let lhs = se3::exp(&(adjoint(&t) * xi));
+        let rhs = se3::compose(&se3::compose(&t, &se3::exp(&xi)), &t.inverse());
+        assert!(close(&lhs, &rhs, 1e-12), "{lhs:?} vs {rhs:?}");
+        // Carried across the identity, the chain just adds up.
+        let c = Matrix6::identity() * 2.0;
+        assert_eq!(chain_step(&c, &Pose::identity(), &c), c * 2.0);
     }
 
     #[test]

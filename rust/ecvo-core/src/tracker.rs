@@ -16,7 +16,7 @@ use nalgebra::Matrix6;
 
 use crate::camera::{Camera, FrameView};
 use crate::config::{Config, MotionPrior, ReferenceLevel, Weighting};
-pub use crate::correction::{correction_distance, fuse_correction};
+pub use crate::correction::{chain_step, correction_distance, fuse_correction};
 use crate::error::Result;
 use crate::motion::{MotionEstimator, MotionResult};
 use crate::prepare::{PreparedFrame, Preparer};
@@ -373,7 +373,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         };
         for c in &mut self.chain {
             *c = match (*c, add) {
-                (Some(c), Some(a)) => Some(c + a),
+                (Some(c), Some(a)) => Some(chain_step(&c, &f2f.pose, &a)),
                 _ => None,
             };
         }
