@@ -111,7 +111,7 @@ impl EngineChoice {
             m.depth_noise,
             m.prior,
             config.max_correction_distance,
-            if config.fuse_corrections { "fused" } else { "replace" }
+            if config.fuse_corrections { "fused" } else { "replaced" }
         )
         .to_lowercase()
     }

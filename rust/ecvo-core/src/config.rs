@@ -254,7 +254,7 @@ pub struct Config {
     /// bivariate weighting only. `f64::INFINITY` switches it off.
     pub max_spread_jump: f64,
     /// Fuse an accepted correction with the frame-to-frame chain it corrects,
-    /// weighing each by its covariance ([`crate::tracker::fuse_correction`]), instead
+    /// weighing each by its covariance ([`crate::correction::fuse_correction`]), instead
     /// of replacing the chain's pose with the correction's as the paper does. Off in
     /// [`Config::paper`].
     pub fuse_corrections: bool,

@@ -11,12 +11,13 @@
 use std::ops::Deref;
 use std::sync::Arc;
 
-use crate::Pose;
 use nalgebra::Matrix6;
 
+use crate::Pose;
 use crate::camera::{Camera, FrameView};
 use crate::config::{Config, MotionPrior, ReferenceLevel, Weighting};
-pub use crate::correction::{chain_step, correction_distance, fuse_correction};
+pub use crate::correction::correction_distance;
+use crate::correction::{chain_step, fuse_correction};
 use crate::error::Result;
 use crate::motion::{MotionEstimator, MotionResult};
 use crate::prepare::{PreparedFrame, Preparer};
@@ -204,8 +205,9 @@ pub struct Tracker<F> {
     /// Residual spreads of the last believed [A]s.
     spread: SpreadWatch,
     /// Covariance of the motion chained frame to frame since each level's reference
-    /// (the sum of the believed [A]s' inverse information matrices; `None` after a
-    /// recovery or a loss, when the chain is broken): [`fuse_correction`].
+    /// (the believed [A]s' inverse information matrices, carried along by
+    /// [`chain_step`]; `None` after a recovery or a loss, when the chain is broken, and
+    /// while `Config::fuse_corrections` is off): [`fuse_correction`].
     chain: Vec<Option<Matrix6<f64>>>,
 }
 
@@ -366,7 +368,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         };
         self.lost_run = 0;
         self.state = TrackingState::Tracking;
-        let add = if believed {
+        let add = if believed && self.config.fuse_corrections {
             f2f.information.try_inverse()
         } else {
             None
