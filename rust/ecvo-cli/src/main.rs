@@ -195,6 +195,11 @@ struct TrackArgs {
     /// photometric one under bivariate weighting (`inf` leaves the fit alone).
     #[arg(long)]
     max_fine_depth_weight: Option<f64>,
+    /// Stop a coarse-to-fine level when the Gauss-Newton model predicts that the next
+    /// update lowers the weighted squared error by less than this fraction (0: run
+    /// until the cost rises or the iterations run out, as --paper does).
+    #[arg(long)]
+    min_predicted_decrease: Option<f64>,
     /// What an accepted correction does to the frame-to-frame chain: fuse (weighed by
     /// their covariances) or replace (the paper's).
     #[arg(long, value_enum)]
@@ -260,6 +265,7 @@ impl TrackArgs {
             }),
             max_correction_distance: self.max_correction_distance,
             max_fine_depth_weight: self.max_fine_depth_weight,
+            min_predicted_decrease: self.min_predicted_decrease,
             fuse_corrections: self.corrections.map(|c| matches!(c, CorrectionsArg::Fuse)),
         };
         TrackSettings {

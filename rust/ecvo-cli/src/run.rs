@@ -67,6 +67,8 @@ pub struct EngineChoice {
     pub max_fine_depth_weight: Option<f64>,
     /// Fuse corrections with the chain (true) or replace it (false).
     pub fuse_corrections: Option<bool>,
+    /// A level's Gauss-Newton stops below this predicted relative decrease.
+    pub min_predicted_decrease: Option<f64>,
 }
 
 impl EngineChoice {
@@ -96,7 +98,7 @@ impl EngineChoice {
             |s| s.name().to_string(),
         );
         format!(
-            "schedule {schedule}, {} weighting, {:?} depth noise, {:?} prior, correction gate {}, corrections {}",
+            "schedule {schedule}, {} weighting, {:?} depth noise, {:?} prior, correction gate {}, corrections {}, stop below a predicted decrease of {}",
             match m.fine_weighting {
                 Some(f) if f != m.weighting =>
                     format!("{:?} then {:?} at the finest step", m.weighting, f),
@@ -111,7 +113,8 @@ impl EngineChoice {
             m.depth_noise,
             m.prior,
             config.max_correction_distance,
-            if config.fuse_corrections { "fused" } else { "replaced" }
+            if config.fuse_corrections { "fused" } else { "replaced" },
+            m.min_predicted_decrease
         )
         .to_lowercase()
     }
@@ -193,6 +196,9 @@ impl TrackSettings {
         }
         if let Some(d) = e.max_correction_distance {
             config.max_correction_distance = d;
+        }
+        if let Some(d) = e.min_predicted_decrease {
+            config.motion.min_predicted_decrease = d;
         }
         if let Some(d) = e.max_fine_depth_weight {
             config.motion.max_fine_depth_weight = d;

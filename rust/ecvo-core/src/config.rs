@@ -163,6 +163,12 @@ pub struct MotionConfig {
     /// Stop a level when the update's translation (m) and rotation (rad) are both
     /// below this.
     pub min_update: f64,
+    /// Stop a level, without taking the update, when the Gauss-Newton model predicts
+    /// that it lowers the weighted squared error `Σ w d²` by less than this fraction
+    /// (`−gᵀδ = gᵀH⁻¹g` against `Σ w d²`; the first iteration of a level always runs).
+    /// Such an update is below the residuals' noise: evaluating it costs a warp and a
+    /// cost pass, and most are then rejected because the cost rose. 0 switches it off.
+    pub min_predicted_decrease: f64,
     /// The scale's fixed-point iteration stops when no entry of Σ moved by more than
     /// this fraction of its diagonal scale.
     pub scale_tolerance: f64,
@@ -306,6 +312,7 @@ impl Config {
                 t_dof: 5.0,
                 levels: Schedule::PyramidStride2.levels(),
                 min_update: 1e-6,
+                min_predicted_decrease: 1e-3,
                 scale_tolerance: 1e-2,
                 min_valid_pixels: 200,
                 max_translation_m: 0.5,
@@ -338,6 +345,7 @@ impl Config {
         let mut c = Config::new(camera, preset, mode);
         c.motion.levels = Schedule::PaperSampling.levels();
         c.motion.scale_tolerance = 1e-3;
+        c.motion.min_predicted_decrease = 0.0;
         c.motion.weighting = Weighting::Scalar;
         c.motion.depth_noise = DepthNoiseModel::Constant;
         c.motion.max_fine_depth_weight = f64::INFINITY;
@@ -449,6 +457,12 @@ impl Config {
             return bad(
                 "motion.min_update",
                 format!("{} is not positive", m.min_update),
+            );
+        }
+        if !(m.min_predicted_decrease >= 0.0 && m.min_predicted_decrease < 1.0) {
+            return bad(
+                "motion.min_predicted_decrease",
+                format!("{} is not in [0, 1)", m.min_predicted_decrease),
             );
         }
         if !(m.scale_tolerance > 0.0 && m.scale_tolerance <= 0.1) {

@@ -188,3 +188,56 @@ fn information_matrix_is_symmetric_positive_definite() {
     assert!(h.cholesky().is_some());
     assert!(r.valid_pixels > 10_000, "{} valid pixels", r.valid_pixels);
 }
+
+/// The predicted-decrease stop (`MotionConfig::min_predicted_decrease`) ends the
+/// levels earlier without moving the result: on Kinect-like noisy frames the
+/// Gauss-Newton iterations drop (measured: 104 to 72 over these pairs) and every
+/// pose stays within 0.5 mm / 0.02° of the pose without the stop, and within the
+/// noisy-frame tolerance of the truth.
+#[test]
+fn predicted_decrease_stop_saves_iterations_not_accuracy() {
+    let seq = sequence(DepthNoise::kinect_like(), 11);
+    let cfg = config(&seq, Mode::Naive);
+    assert!(cfg.motion.min_predicted_decrease > 0.0, "on by default");
+    let mut off = cfg.clone();
+    off.motion.min_predicted_decrease = 0.0;
+    let (mut with, mut without) = (0u32, 0u32);
+    for (a, b) in [(0, 1), (20, 22), (40, 43), (70, 72), (90, 91), (100, 104)] {
+        let (r, truth) = estimate(&seq, a, b, &cfg);
+        let (r0, _) = estimate(&seq, a, b, &off);
+        assert!(
+            r.is_ok() && r0.is_ok(),
+            "{a}->{b}: {:?} {:?}",
+            r.status,
+            r0.status
+        );
+        with += r.iterations[..r.steps].iter().sum::<u32>();
+        without += r0.iterations[..r0.steps].iter().sum::<u32>();
+        let (dt, da) = pose_error(&r.pose, &r0.pose);
+        let (et, ea) = pose_error(&r.pose, &truth);
+        println!(
+            "{a}->{b}: it {:?} vs {:?}; apart {:.3} mm {:.4} deg; error {:.3} mm {:.4} deg",
+            &r.iterations[..r.steps],
+            &r0.iterations[..r0.steps],
+            dt * 1e3,
+            da,
+            et * 1e3,
+            ea
+        );
+        assert!(
+            dt < 5e-4 && da < 0.02,
+            "{a}->{b}: {:.3} mm {da:.4} deg apart",
+            dt * 1e3
+        );
+        assert!(
+            et < 5e-3 && ea < 0.12,
+            "{a}->{b}: {:.3} mm {ea:.4} deg from the truth",
+            et * 1e3
+        );
+    }
+    println!("iterations: {with} with the stop, {without} without");
+    assert!(
+        with < without,
+        "{with} iterations with the stop, {without} without"
+    );
+}

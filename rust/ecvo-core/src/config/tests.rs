@@ -110,6 +110,14 @@ fn validate_rejects_bad_fields() {
         &[0.0, -1.0, f64::NAN],
         |c, v| c.motion.max_fine_depth_weight = v,
     );
+    rejected(
+        "motion.min_predicted_decrease",
+        &[-1e-3, 1.0, f64::NAN, f64::INFINITY],
+        |c, v| c.motion.min_predicted_decrease = v,
+    );
+    let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+    c.motion.min_predicted_decrease = 0.0;
+    assert!(c.validate().is_ok(), "0 switches the stop off");
     let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
     c.max_spread_jump = f64::INFINITY;
     c.motion.max_fine_depth_weight = f64::INFINITY;

@@ -272,7 +272,9 @@ fn best_start<K: Loops>(
 /// every accepted update. A update is accepted only if it lowers the mean robust
 /// cost at the scale it was computed with (the IRLS majoriser, so the robust
 /// objective itself does not rise) and leaves enough residuals; otherwise it is
-/// undone and the step ends.
+/// undone and the step ends. From the second iteration on, an update whose predicted
+/// decrease is below [`MotionConfig::min_predicted_decrease`] is not tried: the step
+/// ends there.
 fn run_step<K: Loops>(
     lp: &mut K,
     level: &ImageLevel,
@@ -309,6 +311,12 @@ fn run_step<K: Loops>(
             out.hit_max = false;
             break;
         };
+        // The model's decrease of `Σ w d²` for δ: `−gᵀδ` (= `gᵀH⁻¹g`).
+        let predicted = -delta.iter().zip(&ne.g).map(|(d, g)| d * g).sum::<f64>();
+        if it > 0 && predicted < cfg.min_predicted_decrease * ne.error {
+            out.hit_max = false;
+            break;
+        }
         let candidate = se3::compose(&se3::exp(&delta), &t);
         let m = lp.warp(&candidate, level, p);
         if m < MIN_STEP_RESIDUALS {
