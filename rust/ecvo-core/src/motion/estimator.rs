@@ -27,18 +27,14 @@ pub(super) trait Loops {
     /// The plain second moments of the stored residuals (see
     /// [`scale::initial_scale`]).
     fn moments(&self, weighting: Weighting) -> PassSums;
-    /// One fixed-point pass of the scale fit at the scale `wh`.
-    fn pass(&mut self, wh: &Whitener, weighting: Weighting) -> PassSums;
+    /// One fixed-point pass of the scale fit at the scale `wh`, and `Σ w d²` at it
+    /// (the bits of [`Self::cost`]).
+    fn pass(&mut self, wh: &Whitener, weighting: Weighting) -> (PassSums, f64);
     /// `Σ w d²` over the stored residuals at the scale `wh`.
     fn cost(&mut self, wh: &Whitener) -> f64;
     /// Weights and whitens the stored residuals and accumulates the normal
-    /// equations; `error` is their [`Self::cost`], computed first.
-    fn normal_equations(
-        &mut self,
-        level: &ImageLevel,
-        wh: &Whitener,
-        error: f64,
-    ) -> NormalEquations;
+    /// equations, with their [`Self::cost`] as the error.
+    fn normal_equations(&mut self, level: &ImageLevel, wh: &Whitener) -> NormalEquations;
 }
 
 /// Smallest number of residuals a coarse step needs to be worth solving.
@@ -180,7 +176,7 @@ pub(super) fn motion_from<K: Loops>(
         (Some(level), Some(_)) => {
             let pose = t;
             lp.warp(&pose, level, &p);
-            fit_scale(lp, &p, scale)
+            fit_scale(lp, &p, scale, None)
         }
         (_, last) => last.and_then(|l| l.scale),
     };
@@ -297,14 +293,19 @@ fn run_step<K: Loops>(
     if n < MIN_STEP_RESIDUALS {
         return out;
     }
-    let Some(mut scale) = fit_scale(lp, p, start) else {
+    let Some(mut scale) = fit_scale(lp, p, start, None) else {
         return out;
     };
     let mut wh = p.whitener(&scale);
-    let mut cost = lp.cost(&wh) / n as f64;
+    // The mean robust cost at `t` for `wh`; each linearisation sums it, so after an
+    // accepted update (a new `t` and scale) it is stale until the next one.
+    let mut cost = f64::NAN;
+    let mut stale = true;
     out.hit_max = true;
     for it in 0..step.max_iterations {
-        let ne = lp.normal_equations(level, &wh, cost * n as f64);
+        let ne = lp.normal_equations(level, &wh);
+        cost = ne.error / n as f64;
+        stale = false;
         out.ne = Some(ne);
         out.iterations = it + 1;
         let Some(delta) = ne.solve() else {
@@ -323,7 +324,9 @@ fn run_step<K: Loops>(
             out.hit_max = false;
             break;
         }
-        let c = lp.cost(&wh) / m as f64;
+        // The candidate's cost and the first pass of the scale fit at `wh`, together.
+        let (first, c) = lp.pass(&wh, p.weighting);
+        let c = c / m as f64;
         // `!(c <= cost)` also rejects NaN.
         if !(c <= cost) {
             out.hit_max = false;
@@ -331,17 +334,20 @@ fn run_step<K: Loops>(
         }
         t = candidate;
         n = m;
-        if let Some(s) = fit_scale(lp, p, Some(scale)) {
+        if let Some(s) = fit_scale(lp, p, Some(scale), Some(first)) {
             scale = s;
             wh = p.whitener(&scale);
         }
-        cost = lp.cost(&wh) / n as f64;
+        stale = true;
         let small = delta.fixed_rows::<3>(0).norm() < cfg.min_update
             && delta.fixed_rows::<3>(3).norm() < cfg.min_update;
         if small {
             out.hit_max = false;
             break;
         }
+    }
+    if stale {
+        cost = lp.cost(&wh) / n as f64;
     }
     out.t = t;
     out.scale = Some(scale);
@@ -351,15 +357,27 @@ fn run_step<K: Loops>(
 }
 
 /// Fits the scale to the stored residuals by fixed-point iteration from `start`
-/// (or from their plain second moments); `None` when there is no residual.
-fn fit_scale<K: Loops>(lp: &mut K, p: &Params, start: Option<Scale>) -> Option<Scale> {
+/// (or from their plain second moments); `None` when there is no residual. `first`:
+/// the sums of a pass at `start` already made.
+fn fit_scale<K: Loops>(
+    lp: &mut K,
+    p: &Params,
+    start: Option<Scale>,
+    first: Option<PassSums>,
+) -> Option<Scale> {
     let (two, one) = lp.counts();
-    let mut s = match start {
-        Some(s) if s.ii > 0.0 && s.zz > 0.0 && s.ii.is_finite() && s.zz.is_finite() => s,
-        _ => scale::next_scale(&lp.moments(p.weighting), two, one, p.weighting)?,
+    let (mut s, mut first) = match start {
+        Some(s) if s.ii > 0.0 && s.zz > 0.0 && s.ii.is_finite() && s.zz.is_finite() => (s, first),
+        _ => (
+            scale::next_scale(&lp.moments(p.weighting), two, one, p.weighting)?,
+            None,
+        ),
     };
     for _ in 0..MAX_SCALE_PASSES {
-        let total = lp.pass(&p.whitener(&s), p.weighting);
+        let total = match first.take() {
+            Some(sums) => sums,
+            None => lp.pass(&p.whitener(&s), p.weighting).0,
+        };
         let next = scale::next_scale(&total, two, one, p.weighting)?;
         let done = scale::settled(&s, &next, p.scale_tolerance);
         s = next;

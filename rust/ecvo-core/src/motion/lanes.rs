@@ -6,274 +6,403 @@
 //! lane keeping its own partial sums, which are added in lane order at the end. The
 //! lane count is fixed (not the machine's vector width), so every lane sees the same
 //! operations in the same order on every target: the sums have the same bits on
-//! x86_64 (SSE2, and its AVX2 copies) and aarch64 (NEON). FMA is never used.
+//! x86_64 (SSE2 and AVX) and aarch64 (NEON). FMA is never used.
 //!
-//! [`V`] is two 4-lane vectors written with the target's intrinsics (SSE2 on x86_64,
-//! NEON on aarch64; both in the baseline of their targets), an array elsewhere (or
-//! with `--cfg ecvo_portable_lanes`). Plain
-//! arrays were tried first: the compiler vectorised the arithmetic but kept the
-//! loop-carried sums as scalars and rebuilt vectors from them every block.
+//! The summing kernels are generic over [`Lanes`], a zero-sized token whose methods
+//! are the vector operations:
+//! - [`Sse2`]: two 4-lane SSE2 vectors (baseline on x86_64);
+//! - [`Avx`]: one 8-lane AVX vector, on x86_64 CPUs with AVX2 (a token exists only
+//!   where [`Avx::detect`] found it); half the instructions of the SSE2 pair and
+//!   fewer register spills in the normal equations' 27 running sums;
+//! - [`Neon`]: two 4-lane NEON vectors (baseline on aarch64);
+//! - [`Portable`]: plain arrays elsewhere, and everywhere with `--cfg
+//!   ecvo_portable_lanes` (to measure the intrinsics against them). Plain arrays
+//!   were tried first: the compiler vectorised the arithmetic but kept the
+//!   loop-carried sums as scalars and rebuilt vectors from them every block.
+//!
+//! [`Base`] is the target's baseline and [`lanes_multiversion!`] calls a kernel
+//! with [`Avx`] when the CPU has it, with [`Base`] otherwise.
 
 /// Points per block of a summing loop.
 pub(super) const LANES: usize = 8;
 
-#[cfg(test)]
-pub(super) use imp::to_array;
-pub(super) use imp::{
-    M, V, W, acc, add, div, finite, flush, load, mul, neg, select, splat, sub, sum,
-};
+/// The vector operations of the summing loops on [`LANES`] `f32` lanes. Every
+/// implementation performs, lane by lane, the IEEE operation its name says.
+pub(super) trait Lanes: Copy {
+    /// Eight `f32` lanes.
+    type V: Copy;
+    /// A lane mask (all ones or all zeros per lane).
+    type M: Copy;
+    /// Eight `f64` lanes.
+    type W: Copy;
+    /// `a + b`.
+    fn add(self, a: Self::V, b: Self::V) -> Self::V;
+    /// `a - b`.
+    fn sub(self, a: Self::V, b: Self::V) -> Self::V;
+    /// `a * b`.
+    fn mul(self, a: Self::V, b: Self::V) -> Self::V;
+    /// `a / b`.
+    fn div(self, a: Self::V, b: Self::V) -> Self::V;
+    /// `[x; 8]`.
+    fn splat(self, x: f32) -> Self::V;
+    /// The 8 values of `s` at `b`.
+    fn load(self, s: &[f32], b: usize) -> Self::V;
+    /// `-a` (the sign bit flipped, as scalar negation does).
+    fn neg(self, a: Self::V) -> Self::V;
+    /// True where `x` is finite (`|x| < ∞`, false for NaN).
+    fn finite(self, x: Self::V) -> Self::M;
+    /// `m ? a : b`.
+    fn select(self, m: Self::M, a: Self::V, b: Self::V) -> Self::V;
+    /// `a += x`.
+    #[inline(always)]
+    fn acc(self, a: &mut Self::V, x: Self::V) {
+        *a = self.add(*a, x);
+    }
+    /// Eight zeros in double precision.
+    fn zero_w(self) -> Self::W;
+    /// `a += x` in double precision.
+    fn flush(self, a: &mut Self::W, x: &Self::V);
+    /// The lanes of `a` added in lane order.
+    fn sum(self, a: &Self::W) -> f64;
+    /// The lanes as an array.
+    #[cfg(test)]
+    fn to_array(self, v: Self::V) -> [f32; 8];
+}
+
+#[cfg(all(target_arch = "x86_64", not(ecvo_portable_lanes)))]
+pub(super) use x86::{Avx, Sse2 as Base};
+
+#[cfg(all(target_arch = "aarch64", not(ecvo_portable_lanes)))]
+pub(super) use arm::Neon as Base;
+
+#[cfg(any(
+    ecvo_portable_lanes,
+    not(any(target_arch = "x86_64", target_arch = "aarch64"))
+))]
+pub(super) use portable::Portable as Base;
+
+/// Defines `pub(crate) fn $name($args) -> $ret` that calls the kernel
+/// `$kernel::<L: Lanes>(l, $args)` (`#[inline(always)]`) with [`Avx`] in a copy
+/// compiled for AVX2 when the CPU has it, with [`Base`] otherwise.
+macro_rules! lanes_multiversion {
+    ($(#[$m:meta])* fn $name:ident($($a:ident: $t:ty),* $(,)?) $(-> $ret:ty)? = $kernel:ident;) => {
+        $(#[$m])*
+        pub(crate) fn $name($($a: $t),*) $(-> $ret)? {
+            #[cfg(all(target_arch = "x86_64", not(ecvo_portable_lanes)))]
+            {
+                #[target_feature(enable = "avx2")]
+                unsafe fn avx2(l: $crate::motion::lanes::Avx, $($a: $t),*) $(-> $ret)? {
+                    $kernel(l, $($a),*)
+                }
+                if let Some(l) = $crate::motion::lanes::Avx::detect() {
+                    // SAFETY: the token exists only where the CPU has AVX2.
+                    return unsafe { avx2(l, $($a),*) };
+                }
+            }
+            $kernel($crate::motion::lanes::Base, $($a),*)
+        }
+    };
+}
+pub(crate) use lanes_multiversion;
 
 #[cfg(all(target_arch = "x86_64", not(ecvo_portable_lanes)))]
 #[allow(unused_unsafe)]
-mod imp {
-    //! SSE2 (baseline on x86_64). The intrinsics used are safe to call where SSE2 is
-    //! enabled, which it always is; the `unsafe` blocks are for older compilers
-    //! and the unaligned loads.
+mod x86 {
+    //! SSE2 (baseline on x86_64) and AVX. The SSE2 intrinsics are safe to call where
+    //! SSE2 is enabled, which it always is; the AVX ones only where the CPU has AVX,
+    //! which holds wherever an [`Avx`] token exists.
+    use super::Lanes;
     use std::arch::x86_64::*;
 
-    /// Eight `f32` lanes.
+    /// The SSE2 lanes: two 4-lane vectors.
     #[derive(Clone, Copy, Debug)]
-    pub(in super::super) struct V(__m128, __m128);
-    /// A lane mask (all ones or all zeros per lane).
-    #[derive(Clone, Copy, Debug)]
-    pub(in super::super) struct M(__m128, __m128);
-    /// Eight `f64` lanes.
-    #[derive(Clone, Copy, Debug)]
-    pub(in super::super) struct W([__m128d; 4]);
+    pub(in super::super) struct Sse2;
 
-    macro_rules! binary {
-        ($($name:ident = $op:ident),*) => {$(
-            #[doc = concat!("`", stringify!($op), "` lane by lane.")]
-            #[inline(always)]
-            pub(in super::super) fn $name(a: V, b: V) -> V {
-                unsafe { V($op(a.0, b.0), $op(a.1, b.1)) }
+    impl Lanes for Sse2 {
+        type V = (__m128, __m128);
+        type M = (__m128, __m128);
+        type W = [__m128d; 4];
+
+        #[inline(always)]
+        fn add(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { (_mm_add_ps(a.0, b.0), _mm_add_ps(a.1, b.1)) }
+        }
+        #[inline(always)]
+        fn sub(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { (_mm_sub_ps(a.0, b.0), _mm_sub_ps(a.1, b.1)) }
+        }
+        #[inline(always)]
+        fn mul(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { (_mm_mul_ps(a.0, b.0), _mm_mul_ps(a.1, b.1)) }
+        }
+        #[inline(always)]
+        fn div(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { (_mm_div_ps(a.0, b.0), _mm_div_ps(a.1, b.1)) }
+        }
+        #[inline(always)]
+        fn splat(self, x: f32) -> Self::V {
+            unsafe { (_mm_set1_ps(x), _mm_set1_ps(x)) }
+        }
+        #[inline(always)]
+        fn load(self, s: &[f32], b: usize) -> Self::V {
+            let s = &s[b..b + 8];
+            // SAFETY: `s` has 8 elements; the loads are unaligned.
+            unsafe { (_mm_loadu_ps(s.as_ptr()), _mm_loadu_ps(s.as_ptr().add(4))) }
+        }
+        #[inline(always)]
+        fn neg(self, a: Self::V) -> Self::V {
+            unsafe {
+                let s = _mm_set1_ps(-0.0);
+                (_mm_xor_ps(a.0, s), _mm_xor_ps(a.1, s))
             }
-        )*};
-    }
-    binary!(
-        add = _mm_add_ps,
-        sub = _mm_sub_ps,
-        mul = _mm_mul_ps,
-        div = _mm_div_ps
-    );
-
-    /// `[x; 8]`.
-    #[inline(always)]
-    pub(in super::super) fn splat(x: f32) -> V {
-        unsafe { V(_mm_set1_ps(x), _mm_set1_ps(x)) }
-    }
-
-    /// The 8 values of `s` at `b`.
-    #[inline(always)]
-    pub(in super::super) fn load(s: &[f32], b: usize) -> V {
-        let s = &s[b..b + 8];
-        // SAFETY: `s` has 8 elements; the loads are unaligned.
-        unsafe { V(_mm_loadu_ps(s.as_ptr()), _mm_loadu_ps(s.as_ptr().add(4))) }
-    }
-
-    /// The lanes as an array.
-    #[cfg(test)]
-    pub(in super::super) fn to_array(v: V) -> [f32; 8] {
-        let mut o = [0.0; 8];
-        // SAFETY: `o` has 8 elements; the stores are unaligned.
-        unsafe {
-            _mm_storeu_ps(o.as_mut_ptr(), v.0);
-            _mm_storeu_ps(o.as_mut_ptr().add(4), v.1);
         }
-        o
-    }
-
-    /// `-a` (the sign bit flipped, as scalar negation does).
-    #[inline(always)]
-    pub(in super::super) fn neg(a: V) -> V {
-        unsafe {
-            let s = _mm_set1_ps(-0.0);
-            V(_mm_xor_ps(a.0, s), _mm_xor_ps(a.1, s))
+        #[inline(always)]
+        fn finite(self, x: Self::V) -> Self::M {
+            unsafe {
+                let (s, inf) = (_mm_set1_ps(-0.0), _mm_set1_ps(f32::INFINITY));
+                (
+                    _mm_cmplt_ps(_mm_andnot_ps(s, x.0), inf),
+                    _mm_cmplt_ps(_mm_andnot_ps(s, x.1), inf),
+                )
+            }
         }
-    }
-
-    /// True where `x` is finite (`|x| < ∞`, false for NaN).
-    #[inline(always)]
-    pub(in super::super) fn finite(x: V) -> M {
-        unsafe {
-            let (s, inf) = (_mm_set1_ps(-0.0), _mm_set1_ps(f32::INFINITY));
-            M(
-                _mm_cmplt_ps(_mm_andnot_ps(s, x.0), inf),
-                _mm_cmplt_ps(_mm_andnot_ps(s, x.1), inf),
-            )
+        #[inline(always)]
+        fn select(self, m: Self::M, a: Self::V, b: Self::V) -> Self::V {
+            unsafe {
+                (
+                    _mm_or_ps(_mm_and_ps(m.0, a.0), _mm_andnot_ps(m.0, b.0)),
+                    _mm_or_ps(_mm_and_ps(m.1, a.1), _mm_andnot_ps(m.1, b.1)),
+                )
+            }
         }
-    }
-
-    /// `m ? a : b` lane by lane.
-    #[inline(always)]
-    pub(in super::super) fn select(m: M, a: V, b: V) -> V {
-        unsafe {
-            V(
-                _mm_or_ps(_mm_and_ps(m.0, a.0), _mm_andnot_ps(m.0, b.0)),
-                _mm_or_ps(_mm_and_ps(m.1, a.1), _mm_andnot_ps(m.1, b.1)),
-            )
+        #[inline(always)]
+        fn zero_w(self) -> Self::W {
+            unsafe { [_mm_setzero_pd(); 4] }
         }
-    }
-
-    /// `a += x` lane by lane.
-    #[inline(always)]
-    pub(in super::super) fn acc(a: &mut V, x: V) {
-        *a = add(*a, x);
-    }
-
-    impl Default for W {
-        fn default() -> Self {
-            unsafe { W([_mm_setzero_pd(); 4]) }
+        #[inline(always)]
+        fn flush(self, a: &mut Self::W, x: &Self::V) {
+            unsafe {
+                let w = [
+                    _mm_cvtps_pd(x.0),
+                    _mm_cvtps_pd(_mm_movehl_ps(x.0, x.0)),
+                    _mm_cvtps_pd(x.1),
+                    _mm_cvtps_pd(_mm_movehl_ps(x.1, x.1)),
+                ];
+                for k in 0..4 {
+                    a[k] = _mm_add_pd(a[k], w[k]);
+                }
+            }
         }
-    }
-
-    /// `a += x` lane by lane in double precision.
-    #[inline(always)]
-    pub(in super::super) fn flush(a: &mut W, x: &V) {
-        unsafe {
-            let w = [
-                _mm_cvtps_pd(x.0),
-                _mm_cvtps_pd(_mm_movehl_ps(x.0, x.0)),
-                _mm_cvtps_pd(x.1),
-                _mm_cvtps_pd(_mm_movehl_ps(x.1, x.1)),
-            ];
+        fn sum(self, a: &Self::W) -> f64 {
+            let mut o = [0.0f64; 8];
             for k in 0..4 {
-                a.0[k] = _mm_add_pd(a.0[k], w[k]);
+                // SAFETY: two elements of `o` from `2 k`; the store is unaligned.
+                unsafe { _mm_storeu_pd(o.as_mut_ptr().add(2 * k), a[k]) };
             }
+            o.iter().fold(0.0, |s, &x| s + x)
+        }
+        #[cfg(test)]
+        fn to_array(self, v: Self::V) -> [f32; 8] {
+            let mut o = [0.0; 8];
+            // SAFETY: `o` has 8 elements; the stores are unaligned.
+            unsafe {
+                _mm_storeu_ps(o.as_mut_ptr(), v.0);
+                _mm_storeu_ps(o.as_mut_ptr().add(4), v.1);
+            }
+            o
         }
     }
 
-    /// The lanes of `a` added in lane order.
-    pub(in super::super) fn sum(a: &W) -> f64 {
-        let mut o = [0.0f64; 8];
-        for k in 0..4 {
-            // SAFETY: two elements of `o` from `2 k`; the store is unaligned.
-            unsafe { _mm_storeu_pd(o.as_mut_ptr().add(2 * k), a.0[k]) };
+    /// The AVX lanes: one 8-lane vector. Only [`Avx::detect`] makes one, on a CPU
+    /// with AVX2 (the kernels that use it are compiled with AVX2 enabled).
+    #[derive(Clone, Copy, Debug)]
+    pub(in super::super) struct Avx(());
+
+    impl Avx {
+        /// The token, when the AVX2 copies may run ([`crate::prepare::simd::avx2`]:
+        /// the CPU has AVX2 and `ECVO_NO_AVX2` is unset).
+        #[inline]
+        pub(in super::super) fn detect() -> Option<Avx> {
+            crate::prepare::simd::avx2().then_some(Avx(()))
         }
-        o.iter().fold(0.0, |s, &x| s + x)
+    }
+
+    // SAFETY (every `unsafe` block below): an `Avx` exists only on a CPU with AVX2,
+    // which includes AVX; loads and stores are unaligned and in bounds.
+    impl Lanes for Avx {
+        type V = __m256;
+        type M = __m256;
+        type W = [__m256d; 2];
+
+        #[inline(always)]
+        fn add(self, a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_add_ps(a, b) }
+        }
+        #[inline(always)]
+        fn sub(self, a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_sub_ps(a, b) }
+        }
+        #[inline(always)]
+        fn mul(self, a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_mul_ps(a, b) }
+        }
+        #[inline(always)]
+        fn div(self, a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_div_ps(a, b) }
+        }
+        #[inline(always)]
+        fn splat(self, x: f32) -> __m256 {
+            unsafe { _mm256_set1_ps(x) }
+        }
+        #[inline(always)]
+        fn load(self, s: &[f32], b: usize) -> __m256 {
+            let s = &s[b..b + 8];
+            unsafe { _mm256_loadu_ps(s.as_ptr()) }
+        }
+        #[inline(always)]
+        fn neg(self, a: __m256) -> __m256 {
+            unsafe { _mm256_xor_ps(a, _mm256_set1_ps(-0.0)) }
+        }
+        #[inline(always)]
+        fn finite(self, x: __m256) -> __m256 {
+            unsafe {
+                let (s, inf) = (_mm256_set1_ps(-0.0), _mm256_set1_ps(f32::INFINITY));
+                _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(s, x), inf)
+            }
+        }
+        #[inline(always)]
+        fn select(self, m: __m256, a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_blendv_ps(b, a, m) }
+        }
+        #[inline(always)]
+        fn zero_w(self) -> Self::W {
+            unsafe { [_mm256_setzero_pd(); 2] }
+        }
+        #[inline(always)]
+        fn flush(self, a: &mut Self::W, x: &__m256) {
+            unsafe {
+                let lo = _mm256_cvtps_pd(_mm256_castps256_ps128(*x));
+                let hi = _mm256_cvtps_pd(_mm256_extractf128_ps::<1>(*x));
+                a[0] = _mm256_add_pd(a[0], lo);
+                a[1] = _mm256_add_pd(a[1], hi);
+            }
+        }
+        #[inline(always)]
+        fn sum(self, a: &Self::W) -> f64 {
+            let mut o = [0.0f64; 8];
+            unsafe {
+                _mm256_storeu_pd(o.as_mut_ptr(), a[0]);
+                _mm256_storeu_pd(o.as_mut_ptr().add(4), a[1]);
+            }
+            o.iter().fold(0.0, |s, &x| s + x)
+        }
+        #[cfg(test)]
+        fn to_array(self, v: __m256) -> [f32; 8] {
+            let mut o = [0.0; 8];
+            unsafe { _mm256_storeu_ps(o.as_mut_ptr(), v) };
+            o
+        }
     }
 }
 
 #[cfg(all(target_arch = "aarch64", not(ecvo_portable_lanes)))]
 #[allow(unused_unsafe)]
-mod imp {
+mod arm {
     //! NEON (baseline on aarch64). The intrinsics used are safe to call where NEON is
     //! enabled, which it always is; the `unsafe` blocks are for older compilers
     //! and the loads and stores.
+    use super::Lanes;
     use std::arch::aarch64::*;
 
-    /// Eight `f32` lanes.
+    /// The NEON lanes: two 4-lane vectors.
     #[derive(Clone, Copy, Debug)]
-    pub(in super::super) struct V(float32x4_t, float32x4_t);
-    /// A lane mask (all ones or all zeros per lane).
-    #[derive(Clone, Copy, Debug)]
-    pub(in super::super) struct M(uint32x4_t, uint32x4_t);
-    /// Eight `f64` lanes.
-    #[derive(Clone, Copy, Debug)]
-    pub(in super::super) struct W([float64x2_t; 4]);
+    pub(in super::super) struct Neon;
 
-    macro_rules! binary {
-        ($($name:ident = $op:ident),*) => {$(
-            #[doc = concat!("`", stringify!($op), "` lane by lane.")]
-            #[inline(always)]
-            pub(in super::super) fn $name(a: V, b: V) -> V {
-                unsafe { V($op(a.0, b.0), $op(a.1, b.1)) }
+    impl Lanes for Neon {
+        type V = (float32x4_t, float32x4_t);
+        type M = (uint32x4_t, uint32x4_t);
+        type W = [float64x2_t; 4];
+
+        #[inline(always)]
+        fn add(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { (vaddq_f32(a.0, b.0), vaddq_f32(a.1, b.1)) }
+        }
+        #[inline(always)]
+        fn sub(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { (vsubq_f32(a.0, b.0), vsubq_f32(a.1, b.1)) }
+        }
+        #[inline(always)]
+        fn mul(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { (vmulq_f32(a.0, b.0), vmulq_f32(a.1, b.1)) }
+        }
+        #[inline(always)]
+        fn div(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { (vdivq_f32(a.0, b.0), vdivq_f32(a.1, b.1)) }
+        }
+        #[inline(always)]
+        fn splat(self, x: f32) -> Self::V {
+            unsafe { (vdupq_n_f32(x), vdupq_n_f32(x)) }
+        }
+        #[inline(always)]
+        fn load(self, s: &[f32], b: usize) -> Self::V {
+            let s = &s[b..b + 8];
+            // SAFETY: `s` has 8 elements.
+            unsafe { (vld1q_f32(s.as_ptr()), vld1q_f32(s.as_ptr().add(4))) }
+        }
+        #[inline(always)]
+        fn neg(self, a: Self::V) -> Self::V {
+            unsafe { (vnegq_f32(a.0), vnegq_f32(a.1)) }
+        }
+        #[inline(always)]
+        fn finite(self, x: Self::V) -> Self::M {
+            unsafe {
+                let inf = vdupq_n_f32(f32::INFINITY);
+                (
+                    vcltq_f32(vabsq_f32(x.0), inf),
+                    vcltq_f32(vabsq_f32(x.1), inf),
+                )
             }
-        )*};
-    }
-    binary!(
-        add = vaddq_f32,
-        sub = vsubq_f32,
-        mul = vmulq_f32,
-        div = vdivq_f32
-    );
-
-    /// `[x; 8]`.
-    #[inline(always)]
-    pub(in super::super) fn splat(x: f32) -> V {
-        unsafe { V(vdupq_n_f32(x), vdupq_n_f32(x)) }
-    }
-
-    /// The 8 values of `s` at `b`.
-    #[inline(always)]
-    pub(in super::super) fn load(s: &[f32], b: usize) -> V {
-        let s = &s[b..b + 8];
-        // SAFETY: `s` has 8 elements.
-        unsafe { V(vld1q_f32(s.as_ptr()), vld1q_f32(s.as_ptr().add(4))) }
-    }
-
-    /// The lanes as an array.
-    #[cfg(test)]
-    pub(in super::super) fn to_array(v: V) -> [f32; 8] {
-        let mut o = [0.0; 8];
-        // SAFETY: `o` has 8 elements.
-        unsafe {
-            vst1q_f32(o.as_mut_ptr(), v.0);
-            vst1q_f32(o.as_mut_ptr().add(4), v.1);
         }
-        o
-    }
-
-    /// `-a`.
-    #[inline(always)]
-    pub(in super::super) fn neg(a: V) -> V {
-        unsafe { V(vnegq_f32(a.0), vnegq_f32(a.1)) }
-    }
-
-    /// True where `x` is finite (`|x| < ∞`, false for NaN).
-    #[inline(always)]
-    pub(in super::super) fn finite(x: V) -> M {
-        unsafe {
-            let inf = vdupq_n_f32(f32::INFINITY);
-            M(
-                vcltq_f32(vabsq_f32(x.0), inf),
-                vcltq_f32(vabsq_f32(x.1), inf),
-            )
+        #[inline(always)]
+        fn select(self, m: Self::M, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { (vbslq_f32(m.0, a.0, b.0), vbslq_f32(m.1, a.1, b.1)) }
         }
-    }
-
-    /// `m ? a : b` lane by lane.
-    #[inline(always)]
-    pub(in super::super) fn select(m: M, a: V, b: V) -> V {
-        unsafe { V(vbslq_f32(m.0, a.0, b.0), vbslq_f32(m.1, a.1, b.1)) }
-    }
-
-    /// `a += x` lane by lane.
-    #[inline(always)]
-    pub(in super::super) fn acc(a: &mut V, x: V) {
-        *a = add(*a, x);
-    }
-
-    impl Default for W {
-        fn default() -> Self {
-            unsafe { W([vdupq_n_f64(0.0); 4]) }
+        #[inline(always)]
+        fn zero_w(self) -> Self::W {
+            unsafe { [vdupq_n_f64(0.0); 4] }
         }
-    }
-
-    /// `a += x` lane by lane in double precision.
-    #[inline(always)]
-    pub(in super::super) fn flush(a: &mut W, x: &V) {
-        unsafe {
-            let w = [
-                vcvt_f64_f32(vget_low_f32(x.0)),
-                vcvt_high_f64_f32(x.0),
-                vcvt_f64_f32(vget_low_f32(x.1)),
-                vcvt_high_f64_f32(x.1),
-            ];
+        #[inline(always)]
+        fn flush(self, a: &mut Self::W, x: &Self::V) {
+            unsafe {
+                let w = [
+                    vcvt_f64_f32(vget_low_f32(x.0)),
+                    vcvt_high_f64_f32(x.0),
+                    vcvt_f64_f32(vget_low_f32(x.1)),
+                    vcvt_high_f64_f32(x.1),
+                ];
+                for k in 0..4 {
+                    a[k] = vaddq_f64(a[k], w[k]);
+                }
+            }
+        }
+        fn sum(self, a: &Self::W) -> f64 {
+            let mut o = [0.0f64; 8];
             for k in 0..4 {
-                a.0[k] = vaddq_f64(a.0[k], w[k]);
+                // SAFETY: two elements of `o` from `2 k`.
+                unsafe { vst1q_f64(o.as_mut_ptr().add(2 * k), a[k]) };
             }
+            o.iter().fold(0.0, |s, &x| s + x)
         }
-    }
-
-    /// The lanes of `a` added in lane order.
-    pub(in super::super) fn sum(a: &W) -> f64 {
-        let mut o = [0.0f64; 8];
-        for k in 0..4 {
-            // SAFETY: two elements of `o` from `2 k`.
-            unsafe { vst1q_f64(o.as_mut_ptr().add(2 * k), a.0[k]) };
+        #[cfg(test)]
+        fn to_array(self, v: Self::V) -> [f32; 8] {
+            let mut o = [0.0; 8];
+            // SAFETY: `o` has 8 elements.
+            unsafe {
+                vst1q_f32(o.as_mut_ptr(), v.0);
+                vst1q_f32(o.as_mut_ptr().add(4), v.1);
+            }
+            o
         }
-        o.iter().fold(0.0, |s, &x| s + x)
     }
 }
 
@@ -281,73 +410,64 @@ mod imp {
     ecvo_portable_lanes,
     not(any(target_arch = "x86_64", target_arch = "aarch64"))
 ))]
-mod imp {
-    //! Plain arrays elsewhere, and everywhere with `--cfg ecvo_portable_lanes` (to
-    //! measure the intrinsics against them).
+mod portable {
+    //! Plain arrays.
+    use super::Lanes;
 
-    /// Eight `f32` lanes.
-    pub(in super::super) type V = [f32; 8];
-    /// A lane mask.
-    pub(in super::super) type M = [bool; 8];
-    /// Eight `f64` lanes.
-    pub(in super::super) type W = [f64; 8];
+    /// The portable lanes: `[f32; 8]`.
+    #[derive(Clone, Copy, Debug)]
+    pub(in super::super) struct Portable;
 
-    fn zip(a: V, b: V, f: impl Fn(f32, f32) -> f32) -> V {
+    fn zip(a: [f32; 8], b: [f32; 8], f: impl Fn(f32, f32) -> f32) -> [f32; 8] {
         std::array::from_fn(|l| f(a[l], b[l]))
     }
-    /// `a + b` lane by lane.
-    pub(in super::super) fn add(a: V, b: V) -> V {
-        zip(a, b, |x, y| x + y)
-    }
-    /// `a - b` lane by lane.
-    pub(in super::super) fn sub(a: V, b: V) -> V {
-        zip(a, b, |x, y| x - y)
-    }
-    /// `a * b` lane by lane.
-    pub(in super::super) fn mul(a: V, b: V) -> V {
-        zip(a, b, |x, y| x * y)
-    }
-    /// `a / b` lane by lane.
-    pub(in super::super) fn div(a: V, b: V) -> V {
-        zip(a, b, |x, y| x / y)
-    }
-    /// `[x; 8]`.
-    pub(in super::super) fn splat(x: f32) -> V {
-        [x; 8]
-    }
-    /// The 8 values of `s` at `b`.
-    pub(in super::super) fn load(s: &[f32], b: usize) -> V {
-        s[b..b + 8].try_into().expect("8 values")
-    }
-    /// The lanes as an array.
-    #[cfg(test)]
-    pub(in super::super) fn to_array(v: V) -> [f32; 8] {
-        v
-    }
-    /// `-a`.
-    pub(in super::super) fn neg(a: V) -> V {
-        a.map(|x| -x)
-    }
-    /// True where `x` is finite.
-    pub(in super::super) fn finite(x: V) -> M {
-        x.map(f32::is_finite)
-    }
-    /// `m ? a : b` lane by lane.
-    pub(in super::super) fn select(m: M, a: V, b: V) -> V {
-        std::array::from_fn(|l| if m[l] { a[l] } else { b[l] })
-    }
-    /// `a += x` lane by lane.
-    pub(in super::super) fn acc(a: &mut V, x: V) {
-        *a = add(*a, x);
-    }
-    /// `a += x` lane by lane in double precision.
-    pub(in super::super) fn flush(a: &mut W, x: &V) {
-        for l in 0..8 {
-            a[l] += x[l] as f64;
+
+    impl Lanes for Portable {
+        type V = [f32; 8];
+        type M = [bool; 8];
+        type W = [f64; 8];
+
+        fn add(self, a: Self::V, b: Self::V) -> Self::V {
+            zip(a, b, |x, y| x + y)
         }
-    }
-    /// The lanes of `a` added in lane order.
-    pub(in super::super) fn sum(a: &W) -> f64 {
-        a.iter().fold(0.0, |s, &x| s + x)
+        fn sub(self, a: Self::V, b: Self::V) -> Self::V {
+            zip(a, b, |x, y| x - y)
+        }
+        fn mul(self, a: Self::V, b: Self::V) -> Self::V {
+            zip(a, b, |x, y| x * y)
+        }
+        fn div(self, a: Self::V, b: Self::V) -> Self::V {
+            zip(a, b, |x, y| x / y)
+        }
+        fn splat(self, x: f32) -> Self::V {
+            [x; 8]
+        }
+        fn load(self, s: &[f32], b: usize) -> Self::V {
+            s[b..b + 8].try_into().expect("8 values")
+        }
+        fn neg(self, a: Self::V) -> Self::V {
+            a.map(|x| -x)
+        }
+        fn finite(self, x: Self::V) -> Self::M {
+            x.map(f32::is_finite)
+        }
+        fn select(self, m: Self::M, a: Self::V, b: Self::V) -> Self::V {
+            std::array::from_fn(|l| if m[l] { a[l] } else { b[l] })
+        }
+        fn zero_w(self) -> Self::W {
+            [0.0; 8]
+        }
+        fn flush(self, a: &mut Self::W, x: &Self::V) {
+            for l in 0..8 {
+                a[l] += x[l] as f64;
+            }
+        }
+        fn sum(self, a: &Self::W) -> f64 {
+            a.iter().fold(0.0, |s, &x| s + x)
+        }
+        #[cfg(test)]
+        fn to_array(self, v: Self::V) -> [f32; 8] {
+            v
+        }
     }
 }

@@ -144,7 +144,7 @@ pub struct MotionEstimator {
     /// Per-chunk robust costs, added in order.
     errors: Vec<f64>,
     /// Per-chunk sums of a scale pass, added in order.
-    sums: Vec<PassSums>,
+    sums: Vec<(PassSums, f64)>,
 }
 
 impl MotionEstimator {
@@ -273,16 +273,18 @@ impl Loops for MotionEstimator {
         sums
     }
 
-    fn pass(&mut self, wh: &Whitener, weighting: Weighting) -> PassSums {
+    fn pass(&mut self, wh: &Whitener, weighting: Weighting) -> (PassSums, f64) {
         let chunks = &self.chunks[..self.used];
         map_chunks(chunks, &mut self.sums, |c| robust::pass(c, wh, weighting));
         let mut total = [0.0f64; 4];
-        for part in &self.sums {
+        let mut cost = 0.0;
+        for (part, e) in &self.sums {
             for k in 0..4 {
                 total[k] += part[k];
             }
+            cost += e;
         }
-        total
+        (total, cost)
     }
 
     fn cost(&mut self, wh: &Whitener) -> f64 {
@@ -295,12 +297,7 @@ impl Loops for MotionEstimator {
         total
     }
 
-    fn normal_equations(
-        &mut self,
-        level: &ImageLevel,
-        wh: &Whitener,
-        error: f64,
-    ) -> NormalEquations {
+    fn normal_equations(&mut self, level: &ImageLevel, wh: &Whitener) -> NormalEquations {
         let cam = level.camera();
         let f = [cam.fx as f32, cam.fy as f32];
         let chunks = &self.chunks[..self.used];
@@ -309,7 +306,6 @@ impl Loops for MotionEstimator {
         for part in &self.partial {
             total.merge(part);
         }
-        total.error = error;
         total
     }
 }

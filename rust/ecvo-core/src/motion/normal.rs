@@ -3,10 +3,9 @@
 
 use nalgebra::{Matrix6, Vector6};
 
-use super::lanes::{self, LANES, V};
-use super::robust::weigh;
+use super::lanes::{LANES, Lanes, lanes_multiversion};
+use super::robust::{RUN, weigh};
 use super::warp::Chunk;
-use crate::prepare::simd::multiversion;
 use crate::scale::Whitener;
 
 /// The Gauss-Newton system `JᵀWJ δ = −JᵀWr` of one linearisation, with its error.
@@ -59,15 +58,11 @@ impl NormalEquations {
     }
 }
 
-/// Points per run of single-precision sums (each lane adds `RUN / LANES` points)
-/// before they are flushed into double precision.
-const RUN: usize = 128;
-
 /// Entries of the upper triangle of `JᵀWJ`.
 const H: usize = 21;
 
-/// The normal equations of a chunk (`count` residuals) at the scale `wh`; `f` is
-/// (fx, fy) of the level. `error` is left 0.
+/// The normal equations of a chunk (`count` residuals) at the scale `wh`, with their
+/// `Σ w d²` (the bits of [`super::robust::cost`]); `f` is (fx, fy) of the level.
 pub(super) fn chunk(c: &Chunk, wh: &Whitener, f: [f32; 2]) -> NormalEquations {
     let n = c.padded();
     let mut ne = accumulate(
@@ -88,9 +83,9 @@ pub(super) fn chunk(c: &Chunk, wh: &Whitener, f: [f32; 2]) -> NormalEquations {
     ne
 }
 
-multiversion! {
-    /// `JᵀWJ` and `JᵀWr` of whitened residuals, summed by lane in f32 over runs of
-    /// [`RUN`] points, by lane in f64 across runs, then lane after lane.
+lanes_multiversion! {
+    /// `JᵀWJ`, `JᵀWr` and `Σ w d²` of whitened residuals, summed by lane in f32 over
+    /// runs of [`RUN`] points, by lane in f64 across runs, then lane after lane.
     fn accumulate(
         ri: &[f32],
         rz: &[f32],
@@ -108,7 +103,8 @@ multiversion! {
 }
 
 #[inline(always)]
-fn accumulate_kernel(
+fn accumulate_kernel<L: Lanes>(
+    l: L,
     ri: &[f32],
     rz: &[f32],
     sz: &[f32],
@@ -124,59 +120,64 @@ fn accumulate_kernel(
 ) -> NormalEquations {
     let n = ri.len();
     let mut total = NormalEquations::default();
-    let mut h64 = [lanes::W::default(); H];
-    let mut g64 = [lanes::W::default(); 6];
-    let zero = lanes::splat(0.0);
-    let (fx, fy) = (lanes::splat(f[0]), lanes::splat(f[1]));
+    let mut h64 = [l.zero_w(); H];
+    let mut g64 = [l.zero_w(); 6];
+    let mut e64 = l.zero_w();
+    let zero = l.splat(0.0);
+    let (fx, fy) = (l.splat(f[0]), l.splat(f[1]));
     for start in (0..n).step_by(RUN) {
         let mut h = [zero; H];
         let mut g = [zero; 6];
+        let mut e = zero;
         for b in (start..n.min(start + RUN)).step_by(LANES) {
-            let r = lanes::load(ri, b);
-            let q = weigh(wh, r, lanes::load(rz, b));
-            let p = [lanes::load(x, b), lanes::load(y, b), lanes::load(z, b)];
+            let r = l.load(ri, b);
+            let q = weigh(l, wh, r, l.load(rz, b));
+            l.acc(&mut e, l.mul(q.w, q.d2));
+            let p = [l.load(x, b), l.load(y, b), l.load(z, b)];
             let (ji, jz) = jacobians(
+                l,
                 p,
-                [lanes::load(gx, b), lanes::load(gy, b)],
-                [lanes::load(dx, b), lanes::load(dy, b)],
-                lanes::load(sz, b),
+                [l.load(gx, b), l.load(gy, b)],
+                [l.load(dx, b), l.load(dy, b)],
+                l.load(sz, b),
                 fx,
                 fy,
             );
             // L r and L J with Σ⁻¹ = Lᵀ L: two whitened rows; without depth the
             // second is 0 and the first is l1d J_I.
-            let l1 = lanes::select(q.two, lanes::splat(wh.l11), lanes::splat(wh.l1d));
-            let l12 = lanes::select(q.two, lanes::splat(wh.l12), zero);
-            let jz: [V; 6] = std::array::from_fn(|k| lanes::select(q.two, jz[k], zero));
-            let a: [V; 6] =
-                std::array::from_fn(|k| lanes::add(lanes::mul(l1, ji[k]), lanes::mul(l12, jz[k])));
-            let c: [V; 6] = std::array::from_fn(|k| lanes::mul(lanes::splat(wh.l22), jz[k]));
-            add_row(&mut h, &mut g, &a, q.a, q.w);
-            add_row(&mut h, &mut g, &c, q.b, q.w);
+            let l1 = l.select(q.two, l.splat(wh.l11), l.splat(wh.l1d));
+            let l12 = l.select(q.two, l.splat(wh.l12), zero);
+            let jz: [L::V; 6] = std::array::from_fn(|k| l.select(q.two, jz[k], zero));
+            let a: [L::V; 6] = std::array::from_fn(|k| l.add(l.mul(l1, ji[k]), l.mul(l12, jz[k])));
+            let c: [L::V; 6] = std::array::from_fn(|k| l.mul(l.splat(wh.l22), jz[k]));
+            add_row(l, &mut h, &mut g, &a, q.a, q.w);
+            add_row(l, &mut h, &mut g, &c, q.b, q.w);
         }
         for k in 0..H {
-            lanes::flush(&mut h64[k], &h[k]);
+            l.flush(&mut h64[k], &h[k]);
         }
         for i in 0..6 {
-            lanes::flush(&mut g64[i], &g[i]);
+            l.flush(&mut g64[i], &g[i]);
         }
+        l.flush(&mut e64, &e);
     }
-    total.h = h64.map(|t| lanes::sum(&t));
-    total.g = g64.map(|t| lanes::sum(&t));
+    total.h = h64.map(|t| l.sum(&t));
+    total.g = g64.map(|t| l.sum(&t));
+    total.error = l.sum(&e64);
     total
 }
 
 /// `h += w jᵀj` (upper triangle) and `g += w jᵀ r` for one whitened row per lane.
 #[inline(always)]
-fn add_row(h: &mut [V; H], g: &mut [V; 6], j: &[V; 6], r: V, w: V) {
-    let wj: [V; 6] = std::array::from_fn(|k| lanes::mul(w, j[k]));
+fn add_row<L: Lanes>(l: L, h: &mut [L::V; H], g: &mut [L::V; 6], j: &[L::V; 6], r: L::V, w: L::V) {
+    let wj: [L::V; 6] = std::array::from_fn(|k| l.mul(w, j[k]));
     let mut k = 0;
     for a in 0..6 {
         for b in a..6 {
-            lanes::acc(&mut h[k], lanes::mul(wj[a], j[b]));
+            l.acc(&mut h[k], l.mul(wj[a], j[b]));
             k += 1;
         }
-        lanes::acc(&mut g[a], lanes::mul(wj[a], r));
+        l.acc(&mut g[a], l.mul(wj[a], r));
     }
 }
 
@@ -186,41 +187,46 @@ fn add_row(h: &mut [V; H], g: &mut [V; 6], j: &[V; 6], r: V, w: V) {
 /// with `s` the depth residual's gain (held fixed, as IRLS holds a weight fixed).
 /// `J_Z` is garbage (NaN) where the depth is missing.
 #[inline(always)]
-pub(super) fn jacobians(p: [V; 3], gi: [V; 2], gz: [V; 2], s: V, fx: V, fy: V) -> ([V; 6], [V; 6]) {
-    use lanes::{add, mul, splat, sub};
+pub(super) fn jacobians<L: Lanes>(
+    l: L,
+    p: [L::V; 3],
+    gi: [L::V; 2],
+    gz: [L::V; 2],
+    s: L::V,
+    fx: L::V,
+    fy: L::V,
+) -> ([L::V; 6], [L::V; 6]) {
     let [x, y, z] = p;
-    let iz = lanes::div(splat(1.0), z);
-    let iz2 = |v: V| mul(mul(v, iz), iz);
-    let neg = lanes::neg;
+    let iz = l.div(l.splat(1.0), z);
+    let iz2 = |v: L::V| l.mul(l.mul(v, iz), iz);
     let a = [
-        mul(mul(gi[0], fx), iz),
-        mul(mul(gi[1], fy), iz),
-        iz2(neg(add(mul(mul(gi[0], fx), x), mul(mul(gi[1], fy), y)))),
+        l.mul(l.mul(gi[0], fx), iz),
+        l.mul(l.mul(gi[1], fy), iz),
+        iz2(l.neg(l.add(l.mul(l.mul(gi[0], fx), x), l.mul(l.mul(gi[1], fy), y)))),
     ];
     let b = [
-        mul(mul(mul(s, gz[0]), fx), iz),
-        mul(mul(mul(s, gz[1]), fy), iz),
-        mul(
+        l.mul(l.mul(l.mul(s, gz[0]), fx), iz),
+        l.mul(l.mul(l.mul(s, gz[1]), fy), iz),
+        l.mul(
             s,
-            sub(
-                iz2(neg(add(mul(mul(gz[0], fx), x), mul(mul(gz[1], fy), y)))),
-                splat(1.0),
+            l.sub(
+                iz2(l.neg(l.add(l.mul(l.mul(gz[0], fx), x), l.mul(l.mul(gz[1], fy), y)))),
+                l.splat(1.0),
             ),
         ),
     ];
-    (twist_row(a, p), twist_row(b, p))
+    (twist_row(l, a, p), twist_row(l, b, p))
 }
 
 /// `a · [I | −[p]×] = [a, p × a]`.
 #[inline(always)]
-fn twist_row(a: [V; 3], p: [V; 3]) -> [V; 6] {
-    use lanes::{mul, sub};
+fn twist_row<L: Lanes>(l: L, a: [L::V; 3], p: [L::V; 3]) -> [L::V; 6] {
     [
         a[0],
         a[1],
         a[2],
-        sub(mul(p[1], a[2]), mul(p[2], a[1])),
-        sub(mul(p[2], a[0]), mul(p[0], a[2])),
-        sub(mul(p[0], a[1]), mul(p[1], a[0])),
+        l.sub(l.mul(p[1], a[2]), l.mul(p[2], a[1])),
+        l.sub(l.mul(p[2], a[0]), l.mul(p[0], a[2])),
+        l.sub(l.mul(p[0], a[1]), l.mul(p[1], a[0])),
     ]
 }

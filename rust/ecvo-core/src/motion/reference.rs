@@ -75,7 +75,7 @@ impl Loops for Reference {
         sums
     }
 
-    fn pass(&mut self, wh: &Whitener, weighting: Weighting) -> PassSums {
+    fn pass(&mut self, wh: &Whitener, weighting: Weighting) -> (PassSums, f64) {
         let mut total = [0.0f64; 4];
         for c in &self.chunks {
             let part = scale::pass(c, wh, weighting);
@@ -83,14 +83,14 @@ impl Loops for Reference {
                 total[k] += part[k];
             }
         }
-        total
+        (total, self.cost(wh))
     }
 
     fn cost(&mut self, wh: &Whitener) -> f64 {
         let mut total = 0.0;
         for res in &self.chunks {
             let mut e = 0.0f64;
-            for run in res.chunks(256) {
+            for run in res.chunks(128) {
                 let mut part = 0.0f32;
                 for r in run {
                     part += wh.cost(r.ri, r.rz);
@@ -102,12 +102,7 @@ impl Loops for Reference {
         total
     }
 
-    fn normal_equations(
-        &mut self,
-        level: &ImageLevel,
-        wh: &Whitener,
-        error: f64,
-    ) -> NormalEquations {
+    fn normal_equations(&mut self, level: &ImageLevel, wh: &Whitener) -> NormalEquations {
         let cam = level.camera();
         let (fx, fy) = (cam.fx as f32, cam.fy as f32);
         let mut total = NormalEquations::default();
@@ -133,7 +128,7 @@ impl Loops for Reference {
             }
             total.merge(&acc.finish());
         }
-        total.error = error;
+        total.error = self.cost(wh);
         total
     }
 }

@@ -4,6 +4,7 @@
 //! within stated tolerances, and the SIMD paths against each other bit for bit.
 
 use super::estimator::{Loops, Params};
+use super::lanes::Lanes;
 use super::reference::Reference;
 use super::*;
 use crate::camera::Camera;
@@ -98,10 +99,12 @@ fn analytic_jacobians_match_finite_differences() {
         // The analytic Jacobians of every point, lane by lane.
         let c = &est.warped()[0];
         let mut jac = Vec::new();
+        let l = lanes::Base;
         for b in (0..c.padded()).step_by(lanes::LANES) {
-            let v = |a: &Vec<f32>| lanes::load(a, b);
-            let f = (lanes::splat(cam.fx as f32), lanes::splat(cam.fy as f32));
+            let v = |a: &Vec<f32>| l.load(a, b);
+            let f = (l.splat(cam.fx as f32), l.splat(cam.fy as f32));
             let (ji, jz) = normal::jacobians(
+                l,
                 [v(&c.x), v(&c.y), v(&c.z)],
                 [v(&c.gx), v(&c.gy)],
                 [v(&c.dx), v(&c.dy)],
@@ -109,11 +112,8 @@ fn analytic_jacobians_match_finite_differences() {
                 f.0,
                 f.1,
             );
-            for l in 0..lanes::LANES {
-                jac.push((
-                    ji.map(|j| lanes::to_array(j)[l]),
-                    jz.map(|j| lanes::to_array(j)[l]),
-                ));
+            for k in 0..lanes::LANES {
+                jac.push((ji.map(|j| l.to_array(j)[k]), jz.map(|j| l.to_array(j)[k])));
             }
         }
         let h = 1e-4;
@@ -308,7 +308,8 @@ fn loops_match_the_per_point_loops() {
                         },
                     ] {
                         let wh = s.whitener(p.nu);
-                        let (a, b) = (new.pass(&wh, weighting), old.pass(&wh, weighting));
+                        let ((a, pass_cost), (b, _)) =
+                            (new.pass(&wh, weighting), old.pass(&wh, weighting));
                         for e in 0..4 {
                             assert!(
                                 close(a[e], b[e], 1e-5, 1e-30),
@@ -317,8 +318,13 @@ fn loops_match_the_per_point_loops() {
                         }
                         let (a, b) = (new.cost(&wh), old.cost(&wh));
                         assert!(close(a, b, 1e-5, 0.0), "{at} cost {a} vs {b}");
-                        let a = new.normal_equations(level, &wh, 1.0);
-                        let b = old.normal_equations(level, &wh, 1.0);
+                        // The pass and the normal equations sum the cost with the
+                        // cost's own bits.
+                        assert_eq!(pass_cost.to_bits(), a.to_bits(), "{at} pass cost");
+                        let cost = a;
+                        let a = new.normal_equations(level, &wh);
+                        let b = old.normal_equations(level, &wh);
+                        assert_eq!(a.error.to_bits(), cost.to_bits(), "{at} NE error");
                         assert_eq!(a.count, b.count);
                         let (ha, hb) = (a.hessian(), b.hessian());
                         for r in 0..6 {
