@@ -200,6 +200,11 @@ struct TrackArgs {
     /// until the cost rises or the iterations run out, as --paper does).
     #[arg(long)]
     min_predicted_decrease: Option<f64>,
+    /// Fixed-point passes of the scale fit after each accepted update, 1 to 20 (1:
+    /// the scale follows the iterations; 20: it converges at every one, as --paper
+    /// does).
+    #[arg(long)]
+    scale_passes: Option<usize>,
     /// What an accepted correction does to the frame-to-frame chain: fuse (weighed by
     /// their covariances) or replace (the paper's).
     #[arg(long, value_enum)]
@@ -266,6 +271,7 @@ impl TrackArgs {
             max_correction_distance: self.max_correction_distance,
             max_fine_depth_weight: self.max_fine_depth_weight,
             min_predicted_decrease: self.min_predicted_decrease,
+            scale_passes: self.scale_passes,
             fuse_corrections: self.corrections.map(|c| matches!(c, CorrectionsArg::Fuse)),
         };
         TrackSettings {

@@ -69,6 +69,8 @@ pub struct EngineChoice {
     pub fuse_corrections: Option<bool>,
     /// A level's Gauss-Newton stops below this predicted relative decrease.
     pub min_predicted_decrease: Option<f64>,
+    /// Scale fit passes after an accepted update.
+    pub scale_passes: Option<usize>,
 }
 
 impl EngineChoice {
@@ -98,7 +100,7 @@ impl EngineChoice {
             |s| s.name().to_string(),
         );
         format!(
-            "schedule {schedule}, {} weighting, {:?} depth noise, {:?} prior, correction gate {}, corrections {}, stop below a predicted decrease of {}",
+            "schedule {schedule}, {} weighting, {:?} depth noise, {:?} prior, correction gate {}, corrections {}, stop below a predicted decrease of {}, {} scale pass(es) per update",
             match m.fine_weighting {
                 Some(f) if f != m.weighting =>
                     format!("{:?} then {:?} at the finest step", m.weighting, f),
@@ -114,7 +116,8 @@ impl EngineChoice {
             m.prior,
             config.max_correction_distance,
             if config.fuse_corrections { "fused" } else { "replaced" },
-            m.min_predicted_decrease
+            m.min_predicted_decrease,
+            m.scale_passes_per_update
         )
         .to_lowercase()
     }
@@ -199,6 +202,9 @@ impl TrackSettings {
         }
         if let Some(d) = e.min_predicted_decrease {
             config.motion.min_predicted_decrease = d;
+        }
+        if let Some(n) = e.scale_passes {
+            config.motion.scale_passes_per_update = n;
         }
         if let Some(d) = e.max_fine_depth_weight {
             config.motion.max_fine_depth_weight = d;

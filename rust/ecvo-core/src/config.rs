@@ -172,6 +172,12 @@ pub struct MotionConfig {
     /// The scale's fixed-point iteration stops when no entry of Σ moved by more than
     /// this fraction of its diagonal scale.
     pub scale_tolerance: f64,
+    /// After an accepted update, the scale is re-fitted by at most this many passes
+    /// of its fixed-point iteration (1..=20; each a pass over the residuals; the
+    /// first comes with the update's cost). One pass lets the scale follow the
+    /// iterations instead of converging at every one; the fit at the start of each
+    /// step still converges.
+    pub scale_passes_per_update: usize,
     /// A result with fewer valid residuals than this at the finest level failed.
     pub min_valid_pixels: usize,
     /// A result moving more than this between the two frames (metres) failed.
@@ -314,6 +320,7 @@ impl Config {
                 min_update: 1e-6,
                 min_predicted_decrease: 1e-3,
                 scale_tolerance: 1e-2,
+                scale_passes_per_update: 1,
                 min_valid_pixels: 200,
                 max_translation_m: 0.5,
                 max_rotation_deg: 45.0,
@@ -346,6 +353,7 @@ impl Config {
         c.motion.levels = Schedule::PaperSampling.levels();
         c.motion.scale_tolerance = 1e-3;
         c.motion.min_predicted_decrease = 0.0;
+        c.motion.scale_passes_per_update = crate::motion::MAX_SCALE_PASSES;
         c.motion.weighting = Weighting::Scalar;
         c.motion.depth_noise = DepthNoiseModel::Constant;
         c.motion.max_fine_depth_weight = f64::INFINITY;
@@ -463,6 +471,16 @@ impl Config {
             return bad(
                 "motion.min_predicted_decrease",
                 format!("{} is not in [0, 1)", m.min_predicted_decrease),
+            );
+        }
+        if !(1..=crate::motion::MAX_SCALE_PASSES).contains(&m.scale_passes_per_update) {
+            return bad(
+                "motion.scale_passes_per_update",
+                format!(
+                    "{} is not in 1..={}",
+                    m.scale_passes_per_update,
+                    crate::motion::MAX_SCALE_PASSES
+                ),
             );
         }
         if !(m.scale_tolerance > 0.0 && m.scale_tolerance <= 0.1) {

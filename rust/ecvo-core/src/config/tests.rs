@@ -115,6 +115,17 @@ fn validate_rejects_bad_fields() {
         &[-1e-3, 1.0, f64::NAN, f64::INFINITY],
         |c, v| c.motion.min_predicted_decrease = v,
     );
+    for bad in [0, 21] {
+        let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
+        c.motion.scale_passes_per_update = bad;
+        assert!(matches!(
+            c.validate(),
+            Err(Error::InvalidConfig {
+                field: "motion.scale_passes_per_update",
+                ..
+            })
+        ));
+    }
     let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
     c.motion.min_predicted_decrease = 0.0;
     assert!(c.validate().is_ok(), "0 switches the stop off");

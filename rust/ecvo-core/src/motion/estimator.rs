@@ -41,7 +41,7 @@ pub(super) trait Loops {
 const MIN_STEP_RESIDUALS: usize = 24;
 
 /// Most fixed-point passes of one scale fit.
-const MAX_SCALE_PASSES: usize = 20;
+pub const MAX_SCALE_PASSES: usize = 20;
 
 /// The settings of one `MOTION` call, in the form the per-pixel loops use.
 #[derive(Clone, Copy, Debug)]
@@ -176,7 +176,7 @@ pub(super) fn motion_from<K: Loops>(
         (Some(level), Some(_)) => {
             let pose = t;
             lp.warp(&pose, level, &p);
-            fit_scale(lp, &p, scale, None)
+            fit_scale(lp, &p, scale, None, MAX_SCALE_PASSES)
         }
         (_, last) => last.and_then(|l| l.scale),
     };
@@ -265,7 +265,8 @@ fn best_start<K: Loops>(
 }
 
 /// One coarse-to-fine step: Gauss-Newton from `t` with the scale re-fitted after
-/// every accepted update. A update is accepted only if it lowers the mean robust
+/// every accepted update (by at most [`MotionConfig::scale_passes_per_update`]
+/// fixed-point passes; the scale fit at the start of the step runs to convergence). A update is accepted only if it lowers the mean robust
 /// cost at the scale it was computed with (the IRLS majoriser, so the robust
 /// objective itself does not rise) and leaves enough residuals; otherwise it is
 /// undone and the step ends. From the second iteration on, an update whose predicted
@@ -293,7 +294,7 @@ fn run_step<K: Loops>(
     if n < MIN_STEP_RESIDUALS {
         return out;
     }
-    let Some(mut scale) = fit_scale(lp, p, start, None) else {
+    let Some(mut scale) = fit_scale(lp, p, start, None, MAX_SCALE_PASSES) else {
         return out;
     };
     let mut wh = p.whitener(&scale);
@@ -334,7 +335,8 @@ fn run_step<K: Loops>(
         }
         t = candidate;
         n = m;
-        if let Some(s) = fit_scale(lp, p, Some(scale), Some(first)) {
+        let passes = cfg.scale_passes_per_update;
+        if let Some(s) = fit_scale(lp, p, Some(scale), Some(first), passes) {
             scale = s;
             wh = p.whitener(&scale);
         }
@@ -356,14 +358,15 @@ fn run_step<K: Loops>(
     out
 }
 
-/// Fits the scale to the stored residuals by fixed-point iteration from `start`
-/// (or from their plain second moments); `None` when there is no residual. `first`:
-/// the sums of a pass at `start` already made.
+/// Fits the scale to the stored residuals by at most `passes` steps of the
+/// fixed-point iteration from `start` (or from their plain second moments); `None`
+/// when there is no residual. `first`: the sums of a pass at `start` already made.
 fn fit_scale<K: Loops>(
     lp: &mut K,
     p: &Params,
     start: Option<Scale>,
     first: Option<PassSums>,
+    passes: usize,
 ) -> Option<Scale> {
     let (two, one) = lp.counts();
     let (mut s, mut first) = match start {
@@ -373,7 +376,7 @@ fn fit_scale<K: Loops>(
             None,
         ),
     };
-    for _ in 0..MAX_SCALE_PASSES {
+    for _ in 0..passes.clamp(1, MAX_SCALE_PASSES) {
         let total = match first.take() {
             Some(sums) => sums,
             None => lp.pass(&p.whitener(&s), p.weighting).0,

@@ -23,6 +23,7 @@
 //! same bits.
 
 mod estimator;
+pub use estimator::MAX_SCALE_PASSES;
 mod lanes;
 mod normal;
 #[cfg(test)]
