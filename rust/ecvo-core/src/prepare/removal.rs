@@ -185,13 +185,27 @@ fn row_kernel(
     }
 }
 
-/// Drops the pixels of `normal_drop` (plus the image border when `normal_filter`)
-/// and the 3x3 neighbourhoods of `seed` from the smoothed depth `z` (`w` wide),
-/// clears their `normals`, and writes level 0's planes: intensity in [0, 1] and the
-/// filtered depth (NaN where missing). A pixel dropped by both filters counts as
-/// removed by the normal filter. `scratch` holds two rows of masks.
-#[inline(never)]
-pub(crate) fn apply_masks(
+multiversion! {
+    /// Drops the pixels of `normal_drop` (plus the image border when `normal_filter`)
+    /// and the 3x3 neighbourhoods of `seed` from the smoothed depth `z` (`w` wide),
+    /// clears their `normals`, and writes level 0's planes: intensity in [0, 1] and
+    /// the filtered depth (NaN where missing). A pixel dropped by both filters counts
+    /// as removed by the normal filter. `scratch` holds two rows of masks.
+    fn apply_masks(
+        intensity: &[u8],
+        z: &[f32],
+        normal_drop: &[u8],
+        seed: &[u8],
+        w: usize,
+        normal_filter: bool,
+        normals: &mut [[f32; 3]],
+        planes: &mut Planes,
+        scratch: &mut Vec<u8>,
+    ) -> Counts = apply_masks_kernel;
+}
+
+#[inline(always)]
+fn apply_masks_kernel(
     intensity: &[u8],
     z: &[f32],
     normal_drop: &[u8],
