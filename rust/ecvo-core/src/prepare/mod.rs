@@ -442,16 +442,9 @@ pub fn max_template_points(config: &Config) -> usize {
 fn build_template(p: &pyramid::Planes, c: &Camera, stride: usize, t: &mut Template) {
     let (w, h) = (c.width, c.height);
     let (ifx, ify, cx, cy) = back_projection(c);
+    t.points.clear();
     let start = (stride / 2).max(1);
-    // Every candidate is written, branch-free, at the next free slot, which only a
-    // valid one takes; then the unused tail is cut.
-    let cap = (h.saturating_sub(1).saturating_sub(start)).div_ceil(stride)
-        * (w.saturating_sub(1).saturating_sub(start)).div_ceil(stride);
-    if t.points.len() < cap {
-        t.points.resize(cap, [0.0; 4]);
-    }
-    let mut n = 0;
-    for y in (start..h.saturating_sub(1)).step_by(stride) {
+    for y in (start..h - 1).step_by(stride) {
         let ry = (y as f32 - cy) * ify;
         let (zr, ir) = (
             &p.depth[y * w..(y + 1) * w],
@@ -459,11 +452,11 @@ fn build_template(p: &pyramid::Planes, c: &Camera, stride: usize, t: &mut Templa
         );
         for x in (start..w - 1).step_by(stride) {
             let z = zr[x];
-            t.points[n] = [(x as f32 - cx) * ifx * z, ry * z, z, ir[x]];
-            n += z.is_finite() as usize;
+            if z.is_finite() {
+                t.points.push([(x as f32 - cx) * ifx * z, ry * z, z, ir[x]]);
+            }
         }
     }
-    t.points.truncate(n);
 }
 
 /// At most `budget` of the template points [`build_template`] would take, chosen by
