@@ -10,12 +10,13 @@ use crate::se3;
 
 /// A correction fused with the frame-to-frame chain it corrects: the motion since
 /// the reference as chained ([A] after [A], `guess`, with covariance `chain`, those
-/// [A]s' inverse information matrices carried along by [`chain_step`]) and as registered directly against
-/// the reference (`result`, covariance the inverse of its information matrix), combined
-/// by their covariances as a Kalman update does: the result moved towards the guess by
-/// `K = Σ_result (Σ_result + Σ_chain)⁻¹` in MOTION's tangent space. A chain of few,
-/// well-constrained [A]s keeps most of its own estimate; a long one takes the direct
-/// registration. `None` when a matrix is singular.
+/// [A]s' inverse information matrices carried along by [`chain_step`]) and as
+/// registered directly against the reference (`result`, covariance the inverse of its
+/// information matrix), combined by their covariances as a Kalman update does: the
+/// result moved towards the guess by `K = Σ_result (Σ_result + Σ_chain)⁻¹` in MOTION's
+/// tangent space. A chain of few, well-constrained [A]s keeps most of its own
+/// estimate; a long one takes the direct registration. `None` when a matrix is
+/// singular.
 pub fn fuse_correction(guess: &Pose, chain: &Matrix6<f64>, result: &MotionResult) -> Option<Pose> {
     let corr = result.information.try_inverse()?;
     let gain = corr * (corr + chain).try_inverse()?;

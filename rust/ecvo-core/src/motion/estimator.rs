@@ -266,12 +266,12 @@ fn best_start<K: Loops>(
 
 /// One coarse-to-fine step: Gauss-Newton from `t` with the scale re-fitted after
 /// every accepted update (by at most [`MotionConfig::scale_passes_per_update`]
-/// fixed-point passes; the scale fit at the start of the step runs to convergence). A update is accepted only if it lowers the mean robust
-/// cost at the scale it was computed with (the IRLS majoriser, so the robust
-/// objective itself does not rise) and leaves enough residuals; otherwise it is
-/// undone and the step ends. From the second iteration on, an update whose predicted
-/// decrease is below [`MotionConfig::min_predicted_decrease`] is not tried: the step
-/// ends there.
+/// fixed-point passes; the scale fit at the start of the step runs to convergence).
+/// An update is accepted only if it lowers the mean robust cost at the scale it was
+/// computed with (the IRLS majoriser, so the robust objective itself does not rise)
+/// and leaves enough residuals; otherwise it is undone and the step ends. From the
+/// second iteration on, an update whose predicted decrease is below
+/// [`MotionConfig::min_predicted_decrease`] is not tried: the step ends there.
 fn run_step<K: Loops>(
     lp: &mut K,
     level: &ImageLevel,
