@@ -23,7 +23,7 @@ use serde_json::json;
 
 use crate::plot::Plane;
 use crate::run::{EngineChoice, Evaluation, RunOutputs, TrackSettings};
-use crate::synth::{Motion, Noise};
+use crate::synth::{Motion, Noise, Size};
 
 #[derive(Parser)]
 #[command(
@@ -135,6 +135,10 @@ enum Command {
         /// Fast motion: peak speed between frames, metres per second.
         #[arg(long)]
         max_speed: Option<f64>,
+        /// Image size and camera: the phone-like 320x180 one, or the TUM Kinect's
+        /// 640x480 (fx = fy = 525, depth in 1/5000 m) seeing the same scene and path.
+        #[arg(long, value_enum, default_value_t = Size::Phone320x180)]
+        size: Size,
     },
 }
 
@@ -385,6 +389,7 @@ fn dispatch(command: Command) -> Result<()> {
             max_rot_speed,
             max_speed,
             texture_contrast,
+            size,
         } => synth::synth_command(
             &out,
             frames,
@@ -397,6 +402,7 @@ fn dispatch(command: Command) -> Result<()> {
                 max_rot_speed_deg: max_rot_speed,
                 max_speed,
                 texture_contrast,
+                size,
             },
         ),
     }

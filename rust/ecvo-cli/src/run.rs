@@ -77,13 +77,15 @@ impl EngineChoice {
     /// A short description for tables and summaries.
     pub fn describe(&self, config: &Config) -> String {
         let m = &config.motion;
+        // The default first: on a large image the two pyramid schedules can give the
+        // same steps (`Schedule::levels_for`).
         let schedule = [
+            Schedule::PyramidStride2,
             Schedule::PaperSampling,
             Schedule::Pyramid,
-            Schedule::PyramidStride2,
         ]
         .into_iter()
-        .find(|s| s.levels() == m.levels)
+        .find(|s| s.levels_for(&config.camera) == m.levels)
         .map_or_else(
             || {
                 m.levels
@@ -177,8 +179,8 @@ impl TrackSettings {
         };
         let e = &self.engine;
         if let Some(name) = &e.schedule {
-            config.motion.levels =
-                ecvo_core::parse_schedule(name).with_context(|| format!("--schedule {name}"))?;
+            config.motion.levels = ecvo_core::parse_schedule(name, &camera)
+                .with_context(|| format!("--schedule {name}"))?;
         }
         if let Some(text) = &e.point_budget {
             let budgets = ecvo_core::parse_point_budget(text)

@@ -6,7 +6,9 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use ecvo_core::Camera;
 use ecvo_io::{SequenceWriter, Trajectory};
-use ecvo_synth::{DepthNoise, FAST_MAX_ANGULAR_SPEED, FAST_MAX_LINEAR_SPEED, SynthSequence};
+use ecvo_synth::{
+    DepthNoise, FAST_MAX_ANGULAR_SPEED, FAST_MAX_LINEAR_SPEED, SynthCamera, SynthSequence,
+};
 
 /// The sensor noise model of `ecvo synth --noise`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -38,6 +40,17 @@ pub enum Motion {
     Fast,
 }
 
+/// The image size and camera of `ecvo synth --size`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Size {
+    /// The phone-like 320x180 camera (fx = fy = 250, depth in millimetres).
+    #[value(name = "320x180")]
+    Phone320x180,
+    /// The TUM Kinect's 640x480 camera (fx = fy = 525, depth in 1/5000 m).
+    #[value(name = "640x480")]
+    Kinect640x480,
+}
+
 /// The motion flags of `ecvo synth`.
 #[derive(Clone, Copy, Debug)]
 pub struct MotionArgs {
@@ -52,6 +65,8 @@ pub struct MotionArgs {
     /// Texture contrast of every surface, (0, 1]: 1 the standard room, towards 0
     /// blank walls.
     pub texture_contrast: f64,
+    /// The camera.
+    pub size: Size,
 }
 
 impl MotionArgs {
@@ -65,6 +80,9 @@ impl MotionArgs {
         let mut seq = self.motion_sequence(frames, seed)?;
         if c < 1.0 {
             seq.scene.scale_contrast(c);
+        }
+        if self.size == Size::Kinect640x480 {
+            seq.camera = SynthCamera::tum_640x480();
         }
         Ok(seq)
     }

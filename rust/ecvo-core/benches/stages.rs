@@ -71,7 +71,8 @@ fn frames(cam: SynthCamera) -> (Config, SynthFrame, SynthFrame) {
     seq.camera = cam;
     let mut config = Config::new(camera_of(&cam), Preset::Pc, Mode::L2);
     if let Ok(s) = std::env::var("ECVO_BENCH_SCHEDULE") {
-        config.motion.levels = ecvo_core::parse_schedule(&s).expect("ECVO_BENCH_SCHEDULE");
+        config.motion.levels =
+            ecvo_core::parse_schedule(&s, &config.camera).expect("ECVO_BENCH_SCHEDULE");
     }
     if let Ok(s) = std::env::var("ECVO_BENCH_POINT_BUDGET") {
         for (level, points) in ecvo_core::parse_point_budget(&s).expect("ECVO_BENCH_POINT_BUDGET") {

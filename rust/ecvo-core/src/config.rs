@@ -4,7 +4,10 @@ use crate::camera::Camera;
 use crate::error::{Error, Result};
 
 mod schedule;
-pub use schedule::{MIN_POINT_BUDGET, MotionLevel, Schedule, parse_point_budget, parse_schedule};
+pub use schedule::{
+    MIN_POINT_BUDGET, MotionLevel, SCHEDULE_SHIFT_SIDE, Schedule, parse_point_budget,
+    parse_schedule,
+};
 
 /// Motion thresholds `(εd, εa)` of one error-correction level: `comp()` asks for a
 /// correction when the accumulated motion exceeds either (section 3.2).
@@ -316,7 +319,7 @@ impl Config {
             motion: MotionConfig {
                 depth_gain: 1.8,
                 t_dof: 5.0,
-                levels: Schedule::PyramidStride2.levels(),
+                levels: Schedule::PyramidStride2.levels_for(&camera),
                 min_update: 1e-6,
                 min_predicted_decrease: 1e-3,
                 scale_tolerance: 1e-2,
@@ -350,7 +353,7 @@ impl Config {
     /// frame a reference, in either configuration.)
     pub fn paper(camera: Camera, preset: Preset, mode: Mode) -> Self {
         let mut c = Config::new(camera, preset, mode);
-        c.motion.levels = Schedule::PaperSampling.levels();
+        c.motion.levels = Schedule::PaperSampling.levels_for(&camera);
         c.motion.scale_tolerance = 1e-3;
         c.motion.min_predicted_decrease = 0.0;
         c.motion.scale_passes_per_update = crate::motion::MAX_SCALE_PASSES;

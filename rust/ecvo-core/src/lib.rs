@@ -28,7 +28,7 @@ pub mod tracker;
 pub use camera::{Camera, FrameView};
 pub use config::{
     Config, DepthNoiseModel, FilterConfig, Mode, MotionConfig, MotionLevel, MotionPrior, Preset,
-    ReferenceLevel, Schedule, Weighting, parse_point_budget, parse_schedule,
+    ReferenceLevel, SCHEDULE_SHIFT_SIDE, Schedule, Weighting, parse_point_budget, parse_schedule,
 };
 pub use error::{Error, Result};
 pub use motion::{MotionEstimator, MotionResult};

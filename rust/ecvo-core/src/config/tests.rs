@@ -47,17 +47,17 @@ fn presets_carry_the_papers_values() {
 #[test]
 fn schedules_parse_by_name_and_by_steps() {
     assert_eq!(
-        parse_schedule("paper").unwrap(),
+        parse_schedule("paper", &cam()).unwrap(),
         Schedule::PaperSampling.levels()
     );
     assert_eq!(
-        parse_schedule(" 3/1/20, 2/1/15,1/1/10,0/2/8").unwrap(),
+        parse_schedule(" 3/1/20, 2/1/15,1/1/10,0/2/8", &cam()).unwrap(),
         Schedule::PyramidStride2.levels()
     );
     for bad in ["", "3/1", "3/1/20,", "a/1/2", "3/-1/2", "pyramid-stride3"] {
         assert!(
             matches!(
-                parse_schedule(bad),
+                parse_schedule(bad, &cam()),
                 Err(Error::InvalidConfig {
                     field: "schedule",
                     ..
@@ -136,13 +136,78 @@ fn validate_rejects_bad_fields() {
 }
 
 #[test]
+fn pyramid_schedules_move_up_on_large_images() {
+    let steps = |c: &Camera| {
+        Config::new(*c, Preset::Pc, Mode::L2)
+            .motion
+            .levels
+            .iter()
+            .map(|l| (l.pyramid_level, l.stride, l.max_iterations))
+            .collect::<Vec<_>>()
+    };
+    let as_written = vec![(3, 1, 20), (2, 1, 15), (1, 1, 10), (0, 2, 8)];
+    let phone = Camera {
+        width: 320,
+        height: 180,
+        ..cam()
+    };
+    assert_eq!(steps(&cam()), as_written, "320x240");
+    assert_eq!(steps(&phone), as_written, "320x180");
+    let vga = Camera {
+        width: 640,
+        height: 480,
+        fx: 517.3,
+        fy: 516.5,
+        cx: 318.6,
+        cy: 255.3,
+        ..cam()
+    };
+    assert_eq!((vga.width, vga.height), (640, 480));
+    assert_eq!(
+        steps(&vga),
+        vec![(4, 1, 20), (3, 1, 15), (2, 1, 10), (1, 1, 8)],
+        "640x480: every pixel of the half-resolution image last"
+    );
+    let big = Camera {
+        width: 1280,
+        height: 960,
+        ..vga
+    };
+    assert_eq!(Schedule::shift_for(&big), 2);
+    assert_eq!(steps(&big)[3], (2, 1, 8));
+    for c in [cam(), vga, big] {
+        assert!(Config::new(c, Preset::Pc, Mode::L2).validate().is_ok());
+    }
+    // Named on the command line, the same; the paper's sampling is never moved, and
+    // steps written out are taken as written.
+    assert_eq!(
+        parse_schedule("pyramid-stride2", &vga).unwrap(),
+        Config::new(vga, Preset::Pc, Mode::L2).motion.levels
+    );
+    assert_eq!(
+        parse_schedule("paper", &vga).unwrap(),
+        Schedule::PaperSampling.levels()
+    );
+    assert_eq!(
+        parse_schedule("3/1/20,2/1/15,1/1/10,0/2/8", &vga).unwrap(),
+        Schedule::PyramidStride2.levels()
+    );
+    assert_eq!(
+        Config::paper(vga, Preset::Pc, Mode::L2).motion.levels,
+        Schedule::PaperSampling.levels()
+    );
+}
+
+#[test]
 fn point_budgets_parse_apply_and_validate() {
-    let steps = parse_schedule("3/1/20,1/1/10/4096,0/2/8/2048").unwrap();
+    let steps = parse_schedule("3/1/20,1/1/10/4096,0/2/8/2048", &cam()).unwrap();
     assert_eq!(
         steps.iter().map(|l| l.max_points).collect::<Vec<_>>(),
         vec![None, Some(4096), Some(2048)]
     );
-    assert!(parse_schedule("0/2/8/x").is_err() && parse_schedule("0/2/8/1/1").is_err());
+    assert!(
+        parse_schedule("0/2/8/x", &cam()).is_err() && parse_schedule("0/2/8/1/1", &cam()).is_err()
+    );
     assert_eq!(
         parse_point_budget(" 1=4096, 0=all").unwrap(),
         vec![(1, Some(4096)), (0, None)]

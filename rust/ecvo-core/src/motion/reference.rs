@@ -231,13 +231,7 @@ fn bilinear(s: &[Sample], w: usize, u: f32, v: f32) -> Sample {
     let (ax, ay) = (u - x0 as f32, v - y0 as f32);
     let i = y0 * w + x0;
     let (p00, p01, p10, p11) = (&s[i], &s[i + 1], &s[i + w], &s[i + w + 1]);
-    let (w00, w01, w10, w11) = (
-        (1.0 - ax) * (1.0 - ay),
-        ax * (1.0 - ay),
-        (1.0 - ax) * ay,
-        ax * ay,
-    );
-    std::array::from_fn(|c| w00 * p00[c] + w01 * p01[c] + w10 * p10[c] + w11 * p11[c])
+    super::warp::lerp_sample(p00, p01, p10, p11, ax, ay)
 }
 
 /// A Jacobian row `[v; ω]` padded to eight lanes (the last two are 0), so that the
