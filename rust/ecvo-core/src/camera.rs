@@ -157,6 +157,20 @@ pub(crate) fn tum_fr1_half() -> Camera {
     }
 }
 
+/// The TUM fr1 camera at full resolution (640x480).
+#[cfg(test)]
+pub(crate) fn tum_fr1() -> Camera {
+    Camera {
+        width: 640,
+        height: 480,
+        fx: 517.3,
+        fy: 516.5,
+        cx: 318.6,
+        cy: 255.3,
+        depth_scale: 5000.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -167,15 +181,7 @@ mod tests {
 
     #[test]
     fn half_moves_the_principal_point_with_pixel_centres() {
-        let full = Camera {
-            width: 640,
-            height: 480,
-            fx: 517.3,
-            fy: 516.5,
-            cx: 318.6,
-            cy: 255.3,
-            depth_scale: 5000.0,
-        };
+        let full = tum_fr1();
         let h = full.half();
         assert_eq!((h.width, h.height), (320, 240));
         assert!((h.cx - 159.05).abs() < 1e-12);

@@ -153,15 +153,7 @@ fn pyramid_schedules_move_up_on_large_images() {
     };
     assert_eq!(steps(&cam()), as_written, "320x240");
     assert_eq!(steps(&phone), as_written, "320x180");
-    let vga = Camera {
-        width: 640,
-        height: 480,
-        fx: 517.3,
-        fy: 516.5,
-        cx: 318.6,
-        cy: 255.3,
-        ..cam()
-    };
+    let vga = crate::camera::tum_fr1();
     assert_eq!((vga.width, vga.height), (640, 480));
     assert_eq!(
         steps(&vga),
