@@ -99,7 +99,8 @@ enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
-    /// Render a synthetic 320x180 phone-like stream with exact ground truth.
+    /// Render a synthetic stream with exact ground truth: a 320x180 phone-like camera
+    /// by default, or the TUM Kinect's 640x480 one (--size).
     Synth {
         /// Output folder (must not already hold a sequence).
         #[arg(long)]

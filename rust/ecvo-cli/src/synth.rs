@@ -1,5 +1,5 @@
-//! `ecvo synth`: render a synthetic phone-like stream with exact ground truth and
-//! write it in the app's recording format.
+//! `ecvo synth`: render a synthetic stream (phone-like 320x180, or the 640x480 Kinect)
+//! with exact ground truth and write it in the app's recording format.
 
 use std::path::Path;
 
