@@ -5,8 +5,8 @@ use crate::error::{Error, Result};
 
 mod schedule;
 pub use schedule::{
-    MIN_POINT_BUDGET, MotionLevel, SCHEDULE_SHIFT_SIDE, Schedule, parse_point_budget,
-    parse_schedule,
+    MAX_SCHEDULE_SHIFT, MIN_POINT_BUDGET, MotionLevel, SCHEDULE_SHIFT_SIDE, Schedule,
+    parse_point_budget, parse_schedule,
 };
 
 /// Motion thresholds `(εd, εa)` of one error-correction level: `comp()` asks for a

@@ -27,8 +27,9 @@ pub mod tracker;
 
 pub use camera::{Camera, FrameView};
 pub use config::{
-    Config, DepthNoiseModel, FilterConfig, Mode, MotionConfig, MotionLevel, MotionPrior, Preset,
-    ReferenceLevel, SCHEDULE_SHIFT_SIDE, Schedule, Weighting, parse_point_budget, parse_schedule,
+    Config, DepthNoiseModel, FilterConfig, MAX_SCHEDULE_SHIFT, Mode, MotionConfig, MotionLevel,
+    MotionPrior, Preset, ReferenceLevel, SCHEDULE_SHIFT_SIDE, Schedule, Weighting,
+    parse_point_budget, parse_schedule,
 };
 pub use error::{Error, Result};
 pub use motion::{MotionEstimator, MotionResult};

@@ -10,6 +10,10 @@ use crate::error::{Error, Result};
 /// move one pyramid level up ([`Schedule::levels_for`]).
 pub const SCHEDULE_SHIFT_SIDE: usize = 640;
 
+/// The most pyramid levels [`Schedule::levels_for`] moves a schedule up: the pyramid
+/// schedules reach level 3, and a configuration at most level 6.
+pub const MAX_SCHEDULE_SHIFT: usize = 3;
+
 /// The smallest point budget a step may have.
 pub const MIN_POINT_BUDGET: usize = 64;
 
@@ -49,11 +53,13 @@ pub enum Schedule {
 impl Schedule {
     /// How many pyramid levels the pyramid schedules move up on `camera`: the number
     /// of halvings that bring the larger image side below [`SCHEDULE_SHIFT_SIDE`]
-    /// (0 at 320x240 and 320x180, 1 at 640x480, 2 at 1280x960).
+    /// (0 at 320x240 and 320x180, 1 at 640x480, 2 at 1280x960), at most
+    /// [`MAX_SCHEDULE_SHIFT`] so that the deepest level stays within the six a
+    /// configuration may use.
     pub fn shift_for(camera: &Camera) -> usize {
         let mut side = camera.width.max(camera.height);
         let mut k = 0;
-        while side >= SCHEDULE_SHIFT_SIDE {
+        while side >= SCHEDULE_SHIFT_SIDE && k < MAX_SCHEDULE_SHIFT {
             side /= 2;
             k += 1;
         }

@@ -167,7 +167,13 @@ fn pyramid_schedules_move_up_on_large_images() {
     };
     assert_eq!(Schedule::shift_for(&big), 2);
     assert_eq!(steps(&big)[3], (2, 1, 8));
-    for c in [cam(), vga, big] {
+    let huge = Camera {
+        width: 8192,
+        height: 6144,
+        ..vga
+    };
+    assert_eq!(Schedule::shift_for(&huge), 3, "capped: level 6 at most");
+    for c in [cam(), vga, big, huge] {
         assert!(Config::new(c, Preset::Pc, Mode::L2).validate().is_ok());
     }
     // Named on the command line, the same; the paper's sampling is never moved, and
