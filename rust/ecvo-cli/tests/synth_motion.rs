@@ -6,7 +6,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{data_lines, run, run_ok, temp_dir, testdata_stream};
+use common::{data_lines, run, run_ok, summary, temp_dir, testdata_stream};
 use ecvo_synth::SynthSequence;
 
 /// Every file under `dir`, relative path and contents, sorted by path.
@@ -193,8 +193,7 @@ fn the_640x480_camera_renders_and_tracks() {
     assert_eq!(camera["depth_scale"].as_f64(), Some(5000.0), "{camera}");
     let out = dir.join("out");
     run_ok(&["run", s, "--out", out.to_str().unwrap(), "--threads", "1"]);
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary = summary(&out);
     assert_eq!(summary["lost_frames"].as_u64(), Some(0), "{summary}");
     let ate = summary["ate_rmse_m"].as_f64().unwrap();
     assert!(ate < 5e-4, "ATE {ate} m");
