@@ -143,6 +143,46 @@ fn analytic_jacobians_match_finite_differences() {
     }
 }
 
+/// The warp's interpolation (three lerps, shared with the per-point reference) against
+/// the four weighted corners it replaced: within rounding, exact at the corners, and
+/// NaN wherever a corner of the channel is NaN.
+#[test]
+fn lerps_interpolate_like_weighted_corners() {
+    let corner = |k: f32| -> crate::prepare::Sample {
+        std::array::from_fn(|c| (c as f32 + 1.0) * (0.3 + k) - 0.7 * k * k)
+    };
+    let (p00, p01, p10, p11) = (corner(0.0), corner(1.0), corner(2.0), corner(3.5));
+    for (ax, ay) in [
+        (0.0, 0.0),
+        (1.0, 0.0),
+        (0.0, 1.0),
+        (0.25, 0.75),
+        (0.5, 0.5),
+        (0.9, 0.1),
+    ] {
+        let got = warp::lerp_sample(&p00, &p01, &p10, &p11, ax, ay);
+        let (w00, w01, w10, w11) = (
+            (1.0 - ax) * (1.0 - ay),
+            ax * (1.0 - ay),
+            (1.0 - ax) * ay,
+            ax * ay,
+        );
+        for c in 0..8 {
+            let want = w00 * p00[c] + w01 * p01[c] + w10 * p10[c] + w11 * p11[c];
+            assert!(
+                (got[c] - want).abs() <= 1e-5 * want.abs().max(1.0),
+                "({ax}, {ay}) channel {c}: {} against {want}",
+                got[c]
+            );
+        }
+    }
+    assert_eq!(warp::lerp_sample(&p00, &p01, &p10, &p11, 1.0, 1.0), p11);
+    let mut hole = p10;
+    hole[3] = f32::NAN;
+    let v = warp::lerp_sample(&p00, &p01, &hole, &p11, 0.5, 0.5);
+    assert!(v[3].is_nan() && v[..3].iter().chain(&v[4..]).all(|x| x.is_finite()));
+}
+
 #[test]
 fn normal_equations_merge_and_solve() {
     let mut a = NormalEquations::default();
