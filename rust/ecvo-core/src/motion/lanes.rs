@@ -83,7 +83,8 @@ pub(super) use portable::Portable as Base;
 
 /// Defines `pub(crate) fn $name($args) -> $ret` that calls the kernel
 /// `$kernel::<L: Lanes>(l, $args)` (`#[inline(always)]`) with [`Avx`] in a copy
-/// compiled for AVX2 when the CPU has it, with [`Base`] otherwise.
+/// compiled for AVX-512 or AVX2 when the CPU has it (the same 8-lane operations, so
+/// the same bits), with [`Base`] otherwise.
 macro_rules! lanes_multiversion {
     ($(#[$m:meta])* fn $name:ident($($a:ident: $t:ty),* $(,)?) $(-> $ret:ty)? = $kernel:ident;) => {
         $(#[$m])*
@@ -94,7 +95,17 @@ macro_rules! lanes_multiversion {
                 unsafe fn avx2(l: $crate::motion::lanes::Avx, $($a: $t),*) $(-> $ret)? {
                     $kernel(l, $($a),*)
                 }
+                // The same 8-lane AVX operations, with the 32 vector registers of
+                // AVX-512 VL to hold the running sums (fewer spills).
+                #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq")]
+                unsafe fn avx512(l: $crate::motion::lanes::Avx, $($a: $t),*) $(-> $ret)? {
+                    $kernel(l, $($a),*)
+                }
                 if let Some(l) = $crate::motion::lanes::Avx::detect() {
+                    if $crate::prepare::simd::avx512() {
+                        // SAFETY: the CPU has these features (checked at run time).
+                        return unsafe { avx512(l, $($a),*) };
+                    }
                     // SAFETY: the token exists only where the CPU has AVX2.
                     return unsafe { avx2(l, $($a),*) };
                 }

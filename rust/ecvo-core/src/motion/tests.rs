@@ -14,7 +14,6 @@ use crate::scale::{self, Scale};
 use crate::se3;
 use ecvo_synth::{DepthNoise, SynthCamera, SynthSequence};
 use nalgebra::Vector6;
-use std::sync::atomic::Ordering;
 
 /// A level whose intensity and depth are affine in the pixel coordinates, so that
 /// central differences and bilinear interpolation are exact and finite
@@ -262,15 +261,6 @@ fn close(a: f64, b: f64, tol: f64, floor: f64) -> bool {
     (a - b).abs() <= tol * (b.abs() + floor)
 }
 
-/// Runs `f` on the baseline SIMD path and on the widest one.
-fn on_both_paths(mut f: impl FnMut(bool)) {
-    for baseline in [true, false] {
-        simd::BASELINE_ONLY.store(baseline, Ordering::Relaxed);
-        f(baseline);
-    }
-    simd::BASELINE_ONLY.store(false, Ordering::Relaxed);
-}
-
 /// The warp gives each point the bits the per-point warp gave it, in the same
 /// order; the scale passes, the cost and the normal equations (sums in another
 /// order) agree to a relative 1e-5 of each entry (1e-5 of the diagonal's scale for
@@ -297,7 +287,7 @@ fn loops_match_the_per_point_loops() {
             true,
         ),
     ];
-    on_both_paths(|baseline| {
+    simd::on_each_path(|path| {
         for (k, &(camera, noise, weighting, quadratic)) in cases.iter().enumerate() {
             let (cfg, fa, fb) = pair(camera, noise, 3 + k as u64, 10, 12, Mode::L2);
             let p = params(weighting, quadratic);
@@ -307,7 +297,7 @@ fn loops_match_the_per_point_loops() {
                 new.load(&template.points);
                 old.load(&template.points);
                 for t in poses() {
-                    let at = format!("case {k} baseline {baseline} level {}", step.pyramid_level);
+                    let at = format!("case {k} {path} level {}", step.pyramid_level);
                     let n = new.warp(&t, level, &p);
                     assert_eq!(n, old.warp(&t, level, &p), "{at}");
                     assert_eq!(new.counts(), old.counts(), "{at}");
@@ -458,18 +448,15 @@ fn poses_match_the_per_point_loops() {
                     &cfg.motion,
                 );
                 let mut bits = None;
-                on_both_paths(|baseline| {
+                simd::on_each_path(|path| {
                     let got = MotionEstimator::new().motion_from(&fb, &fa, &inits, &cfg.motion);
-                    assert_eq!(got.status, want.status, "{at} baseline {baseline}");
-                    assert_eq!(got.start, want.start, "{at} baseline {baseline}");
+                    assert_eq!(got.status, want.status, "{at} {path}");
+                    assert_eq!(got.start, want.start, "{at} {path}");
                     let d = got.pose.inverse() * want.pose;
                     // 2 |sin(θ/2)| ≈ θ, accurate for small angles (unlike acos).
                     let (dt, da) = (d.translation.vector.norm(), 2.0 * d.rotation.imag().norm());
                     worst = (worst.0.max(dt), worst.1.max(da));
-                    assert!(
-                        dt < 1e-5 && da < 1e-5,
-                        "{at} baseline {baseline}: {dt:e} m {da:e} rad"
-                    );
+                    assert!(dt < 1e-5 && da < 1e-5, "{at} {path}: {dt:e} m {da:e} rad");
                     let b: Vec<u64> = got
                         .pose
                         .to_homogeneous()

@@ -2,17 +2,19 @@
 //!
 //! The kernels are plain Rust written so that the compiler vectorises them: SSE2 on
 //! x86_64 (4 lanes), NEON on aarch64 (4 lanes), both in the baseline of their
-//! targets. On x86_64 [`multiversion!`] compiles a kernel a second time with AVX2
-//! enabled (8 lanes) and calls that copy when the CPU has AVX2. FMA is not enabled
-//! and Rust never contracts `a * b + c` on its own, so both copies perform the same
-//! IEEE operations on every pixel and give the same bits.
+//! targets. On x86_64 [`multiversion!`] compiles a kernel twice more, with AVX2
+//! enabled (8 lanes) and with AVX-512 (F, VL, BW, DQ: 16 lanes and 32 vector
+//! registers), and calls the widest copy the CPU has. FMA is not enabled and Rust
+//! never contracts `a * b + c` on its own, so every copy performs the same IEEE
+//! operations on every pixel and gives the same bits.
 //!
 //! Why this and not a SIMD crate: the kernels stay plain, portable Rust (the same
 //! source is the NEON build), there is no new dependency, and the bits cannot
 //! depend on the path. Measured with `cargo bench -p ecvo-core --bench stages`,
 //! `ECVO_NO_AVX2=1` against the default on the same machine, the AVX2 copies of the
-//! bilateral filter and the normals make the whole preparation about 1.5x faster
-//! (`docs/profile.md`); the other passes are memory-bound and are not duplicated.
+//! bilateral filter and the normals make the whole preparation about 1.5x faster;
+//! `ECVO_NO_AVX512=1` against the default on an AVX-512 CPU (AMD EPYC, Zen 4), the
+//! AVX-512 copies make `prepare/320x180` about 1.5x faster again (`docs/profile.md`).
 
 /// Whether the AVX2 copies may run: the CPU has AVX2, and `ECVO_NO_AVX2` is unset
 /// (to measure or test the baseline path on the same machine).
@@ -21,7 +23,7 @@ pub(crate) fn avx2() -> bool {
     use std::sync::OnceLock;
     static AVX2: OnceLock<bool> = OnceLock::new();
     #[cfg(test)]
-    if BASELINE_ONLY.load(std::sync::atomic::Ordering::Relaxed) {
+    if WIDEST.load(std::sync::atomic::Ordering::Relaxed) < 1 {
         return false;
     }
     *AVX2.get_or_init(|| {
@@ -29,14 +31,47 @@ pub(crate) fn avx2() -> bool {
     })
 }
 
-/// Tests set this to run the baseline copies (every copy gives the same bits, so
-/// tests running meanwhile are not affected).
+/// Whether the AVX-512 copies may run: the AVX2 copies may ([`avx2`]), the CPU has
+/// AVX-512 F, VL, BW and DQ, and `ECVO_NO_AVX512` is unset.
+#[cfg(target_arch = "x86_64")]
+pub(crate) fn avx512() -> bool {
+    use std::sync::OnceLock;
+    static AVX512: OnceLock<bool> = OnceLock::new();
+    #[cfg(test)]
+    if WIDEST.load(std::sync::atomic::Ordering::Relaxed) < 2 {
+        return false;
+    }
+    avx2()
+        && *AVX512.get_or_init(|| {
+            std::env::var_os("ECVO_NO_AVX512").is_none()
+                && std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx512vl")
+                && std::arch::is_x86_feature_detected!("avx512bw")
+                && std::arch::is_x86_feature_detected!("avx512dq")
+        })
+}
+
+/// Tests lower this to run the narrower copies: 0 the baseline only, 1 at most AVX2,
+/// 2 (the default) any. Every copy gives the same bits, so tests running meanwhile
+/// are not affected.
 #[cfg(test)]
-pub(crate) static BASELINE_ONLY: std::sync::atomic::AtomicBool =
-    std::sync::atomic::AtomicBool::new(false);
+pub(crate) static WIDEST: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(2);
+
+/// Runs `f(name)` with each copy in turn as the widest allowed (the CPU may lack the
+/// wider ones: then the widest it has runs), then allows them all again.
+#[cfg(test)]
+pub(crate) fn on_each_path(mut f: impl FnMut(&str)) {
+    use std::sync::atomic::Ordering;
+    for (k, name) in ["baseline", "avx2", "avx512"].into_iter().enumerate() {
+        WIDEST.store(k as u8, Ordering::Relaxed);
+        f(name);
+    }
+    WIDEST.store(2, Ordering::Relaxed);
+}
 
 /// Defines `pub(crate) fn $name($args) -> $ret` that calls `$body`'s
-/// `#[inline(always)]` kernel `$kernel`, through an AVX2 copy when the CPU has it.
+/// `#[inline(always)]` kernel `$kernel`, through an AVX-512 or AVX2 copy when the CPU
+/// has it.
 macro_rules! multiversion {
     ($(#[$m:meta])* fn $name:ident($($a:ident: $t:ty),* $(,)?) $(-> $ret:ty)? = $kernel:ident;) => {
         $(#[$m])*
@@ -46,6 +81,14 @@ macro_rules! multiversion {
                 #[target_feature(enable = "avx2")]
                 unsafe fn avx2($($a: $t),*) $(-> $ret)? {
                     $kernel($($a),*)
+                }
+                #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq")]
+                unsafe fn avx512($($a: $t),*) $(-> $ret)? {
+                    $kernel($($a),*)
+                }
+                if $crate::prepare::simd::avx512() {
+                    // SAFETY: the CPU has these features (checked at run time).
+                    return unsafe { avx512($($a),*) };
                 }
                 if $crate::prepare::simd::avx2() {
                     // SAFETY: the CPU has AVX2 (checked at run time just above).

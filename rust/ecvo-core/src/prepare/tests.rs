@@ -8,7 +8,6 @@ use crate::config::Config;
 use crate::config::{BilateralConfig, Mode, Preset};
 use crate::prepare::{Preparer, bilateral, simd};
 use ecvo_synth::{SynthCamera, SynthSequence};
-use std::sync::atomic::Ordering;
 
 /// The bilateral filter as first written: pixel after pixel, its window clipped at
 /// the image border.
@@ -101,8 +100,7 @@ fn blocked_bilateral_equals_the_clipped_filter_bit_for_bit() {
         let mut depth = vec![0.0; w * h];
         bilateral::load_plain(&raw, range, &mut depth);
         let want = clipped_reference(&depth, w, h, &spatial, r, sr);
-        for baseline in [false, true] {
-            simd::BASELINE_ONLY.store(baseline, Ordering::Relaxed);
+        simd::on_each_path(|path| {
             let mut padded = Vec::new();
             bilateral::load_padded(&raw, w, h, r, range, &mut padded);
             let mut got = vec![0.0; w * h];
@@ -111,11 +109,10 @@ fn blocked_bilateral_equals_the_clipped_filter_bit_for_bit() {
                 assert_eq!(
                     a.to_bits(),
                     b.to_bits(),
-                    "{w}x{h} r {r} baseline {baseline}: pixel {i}: {a} vs {b}"
+                    "{w}x{h} r {r} {path}: pixel {i}: {a} vs {b}"
                 );
             }
-        }
-        simd::BASELINE_ONLY.store(false, Ordering::Relaxed);
+        });
     }
 }
 
@@ -205,16 +202,11 @@ fn fused_passes_equal_the_old_preparation_bit_for_bit() {
                     depth: &f.depth,
                 };
                 old.prepare_into(view, &mut want).unwrap();
-                for baseline in [false, true] {
-                    simd::BASELINE_ONLY.store(baseline, Ordering::Relaxed);
+                simd::on_each_path(|path| {
                     new.prepare_into(view, &mut got).unwrap();
-                    let what = format!(
-                        "{}x{} config {k} frame {i} baseline {baseline}",
-                        cam.width, cam.height
-                    );
+                    let what = format!("{}x{} config {k} frame {i} {path}", cam.width, cam.height);
                     same(&got, &want, &what);
-                }
-                simd::BASELINE_ONLY.store(false, Ordering::Relaxed);
+                });
             }
         }
     }
