@@ -334,7 +334,9 @@ fn gather_kernel(
         // A point outside the level reads the first cell and is not kept.
         let i = c.max(0) as usize;
         let (ax, ay) = (ax[k], ay[k]);
-        let (p00, p01, p10, p11) = (&s[i], &s[i + 1], &s[i + w], &s[i + w + 1]);
+        // One bounds check for the cell's four pixels.
+        let cell_px = &s[i..i + w + 2];
+        let (p00, p01, p10, p11) = (&cell_px[0], &cell_px[1], &cell_px[w], &cell_px[w + 1]);
         let v = lerp_sample(p00, p01, p10, p11, ax, ay);
         // n <= k: the point is read before its slot is (over)written.
         let (px, py, pz) = (x[k], y[k], z[k]);
