@@ -13,7 +13,9 @@
 //! - [`Sse2`]: two 4-lane SSE2 vectors (baseline on x86_64);
 //! - [`Avx`]: one 8-lane AVX vector, on x86_64 CPUs with AVX2 (a token exists only
 //!   where [`Avx::detect`] found it); half the instructions of the SSE2 pair and
-//!   fewer register spills in the normal equations' 27 running sums;
+//!   fewer register spills in the normal equations' 27 running sums; on CPUs with
+//!   AVX-512 the same kernels are compiled again with it enabled, for its 32 vector
+//!   registers (the operations, and so the bits, are the same);
 //! - [`Neon`]: two 4-lane NEON vectors (baseline on aarch64);
 //! - [`Portable`]: plain arrays elsewhere, and everywhere with `--cfg
 //!   ecvo_portable_lanes` (to measure the intrinsics against them). Plain arrays
