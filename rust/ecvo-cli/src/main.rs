@@ -5,6 +5,10 @@
 //! Every error is printed as one message naming the file (and line) involved, and
 //! the process exits with status 1 (2 for unusable command-line flags).
 
+// The help texts are these doc comments, and they name the paper's motion
+// estimations [A], [B], [C] as the paper does: not links.
+#![allow(rustdoc::broken_intra_doc_links)]
+
 mod engine;
 mod plot;
 mod run;

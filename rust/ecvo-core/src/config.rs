@@ -142,12 +142,12 @@ pub enum DepthNoiseModel {
     Quadratic,
 }
 
-/// What to start [A], the frame-to-frame `MOTION`, from.
+/// What to start \[A\], the frame-to-frame `MOTION`, from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MotionPrior {
     /// The identity, as the paper does.
     Identity,
-    /// Constant velocity: the previous frame's [A] scaled by the ratio of the frame
+    /// Constant velocity: the previous frame's \[A\] scaled by the ratio of the frame
     /// intervals. The identity is tried too at the coarsest step and the better start
     /// is kept, so that a sudden stop costs nothing.
     ConstantVelocity,
@@ -205,7 +205,7 @@ pub struct MotionConfig {
     pub max_fine_depth_weight: f64,
     /// How the depth residual's noise grows with depth.
     pub depth_noise: DepthNoiseModel,
-    /// What [A] starts from.
+    /// What \[A\] starts from.
     pub prior: MotionPrior,
     /// A result whose photometric residuals spread more than this (the robust scale
     /// `√Σ_II`, intensity in [0, 1]) failed: the two frames do not show the same
@@ -249,7 +249,7 @@ pub struct Config {
     /// After this many consecutive lost frames the tracker re-anchors on the next
     /// frame at the last good pose instead of insisting on the old frames.
     pub max_lost_frames: u32,
-    /// A correction ([B], [C], ...) whose result moved further than this from its
+    /// A correction (\[B\], \[C\], ...) whose result moved further than this from its
     /// initial guess is rejected: the mean change it makes to the whitened residuals,
     /// `δᵀ H δ / n` for the twist δ between guess and result and the information
     /// matrix H (whitened by the estimated scale) over n residuals. A correction
@@ -258,7 +258,7 @@ pub struct Config {
     pub max_correction_distance: f64,
     /// A frame whose registration implies a camera speed above this (translation
     /// from the previous frame over the time between their timestamps, m/s) is not
-    /// believed: it is treated as a failed [A] (recovery, then lost). A hand-held or
+    /// believed: it is treated as a failed \[A\] (recovery, then lost). A hand-held or
     /// head-mounted camera stays well below 4 m/s; an unannounced zoom or a
     /// teleport reads as tens of m/s. `f64::INFINITY` believes every speed.
     pub max_speed_m_s: f64,
@@ -348,7 +348,7 @@ impl Config {
     }
 
     /// The paper's method as written, to reproduce its Table 1: the 8/4/2 sampling of
-    /// the full-resolution image, one scalar scale with λ, [A] from the identity and
+    /// the full-resolution image, one scalar scale with λ, \[A\] from the identity and
     /// every converged correction accepted. (A failed correction never makes the
     /// frame a reference, in either configuration.)
     pub fn paper(camera: Camera, preset: Preset, mode: Mode) -> Self {

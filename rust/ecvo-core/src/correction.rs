@@ -1,4 +1,4 @@
-//! What the tracker does with a correction ([B], [C], ...): how far its result lies
+//! What the tracker does with a correction (\[B\], \[C\], ...): how far its result lies
 //! from its guess ([`correction_distance`], the gate), and how it is fused with the
 //! frame-to-frame chain it corrects ([`fuse_correction`]).
 
@@ -9,12 +9,12 @@ use crate::motion::MotionResult;
 use crate::se3;
 
 /// A correction fused with the frame-to-frame chain it corrects: the motion since
-/// the reference as chained ([A] after [A], `guess`, with covariance `chain`, those
-/// [A]s' inverse information matrices carried along by [`chain_step`]) and as
+/// the reference as chained (\[A\] after \[A\], `guess`, with covariance `chain`, those
+/// \[A\]s' inverse information matrices carried along by [`chain_step`]) and as
 /// registered directly against the reference (`result`, covariance the inverse of its
 /// information matrix), combined by their covariances as a Kalman update does: the
 /// result moved towards the guess by `K = Σ_result (Σ_result + Σ_chain)⁻¹` in MOTION's
-/// tangent space. A chain of few, well-constrained [A]s keeps most of its own
+/// tangent space. A chain of few, well-constrained \[A\]s keeps most of its own
 /// estimate; a long one takes the direct registration. `None` when a matrix is
 /// singular.
 pub fn fuse_correction(guess: &Pose, chain: &Matrix6<f64>, result: &MotionResult) -> Option<Pose> {
@@ -27,10 +27,10 @@ pub fn fuse_correction(guess: &Pose, chain: &Matrix6<f64>, result: &MotionResult
     se3::is_finite(&fused).then_some(fused)
 }
 
-/// The chain's covariance one [A] on: `Ad · chain · Adᵀ + step`, the earlier
+/// The chain's covariance one \[A\] on: `Ad · chain · Adᵀ + step`, the earlier
 /// frames' uncertainty carried into the current camera's coordinates (MOTION's
 /// perturbations act there) by the adjoint of `T_{p→c} = motion⁻¹`, plus the new
-/// [A]'s (`motion` is its `T_{c,p}`, `step` the inverse of its information matrix).
+/// \[A\]'s (`motion` is its `T_{c,p}`, `step` the inverse of its information matrix).
 pub fn chain_step(chain: &Matrix6<f64>, motion: &Pose, step: &Matrix6<f64>) -> Matrix6<f64> {
     let ad = adjoint(&motion.inverse());
     ad * chain * ad.transpose() + step

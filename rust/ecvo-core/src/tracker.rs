@@ -1,11 +1,11 @@
 //! Adaptive multi-level pose error correction (section 3, Figure 1(b)).
 //!
 //! Every frame is registered against the previous one, `T_{c,p} = MOTION(Fc, Fp, I)`
-//! (box [A]). When the motion accumulated since the level-1 reference,
+//! (box \[A\]). When the motion accumulated since the level-1 reference,
 //! `T_{p,r1} T_{c,p}`, passes `comp(·, (εd, εa))`, the pose is re-estimated against
-//! that reference seeded with the accumulated motion (box [B]) and the frame
+//! that reference seeded with the accumulated motion (box \[B\]) and the frame
 //! becomes the new level-1 reference; a new level-1 reference is checked the same
-//! way against level 2 with looser thresholds (box [C]), and so on for N levels.
+//! way against level 2 with looser thresholds (box \[C\]), and so on for N levels.
 //! Only the previous frame and one frame per level are kept.
 
 use std::ops::Deref;
@@ -59,12 +59,12 @@ pub struct FrameOutput {
     pub reference_levels: u8,
     /// `MOTION` calls spent on this frame.
     pub motion_estimations: u32,
-    /// The frame-to-frame estimate `T_{c,p}` of box [A] (None for the first frame).
+    /// The frame-to-frame estimate `T_{c,p}` of box \[A\] (None for the first frame).
     pub frame_to_frame: Option<MotionResult>,
     /// After too many lost frames the tracker started afresh at this frame, keeping
     /// the last good pose.
     pub reanchored: bool,
-    /// [A] failed but the frame registered against a kept reference frame instead.
+    /// \[A\] failed but the frame registered against a kept reference frame instead.
     pub recovered: bool,
     /// Corrections of this frame that failed or were rejected (it kept the pose it
     /// had before each of them and did not become that level's reference).
@@ -82,7 +82,7 @@ pub struct Counters {
     pub references: Vec<u64>,
     /// Frames that did not register against the previous frame.
     pub lost_frames: u64,
-    /// Corrections ([B], [C], ...) that failed; the frame kept its uncorrected pose
+    /// Corrections (\[B\], \[C\], ...) that failed; the frame kept its uncorrected pose
     /// and did not become a reference at that level or above.
     pub failed_corrections: u64,
     /// Corrections that converged implausibly far from their initial guess
@@ -92,17 +92,17 @@ pub struct Counters {
     /// [`MAX_REFUSED_CORRECTIONS`] refused corrections in a row against them (they
     /// also count in `references`).
     pub stale_references: u64,
-    /// Frames whose [A] failed but that registered against a kept reference frame.
+    /// Frames whose \[A\] failed but that registered against a kept reference frame.
     pub recovered_frames: u64,
-    /// [A]s that started from the constant-velocity prediction rather than the
+    /// \[A\]s that started from the constant-velocity prediction rather than the
     /// identity (the prediction explained the coarsest level better).
     pub predicted_starts: u64,
     /// Times the tracker started afresh after a run of lost frames.
     pub reanchors: u64,
-    /// Registrations ([A] or a recovery) not believed because they implied a camera
+    /// Registrations (\[A\] or a recovery) not believed because they implied a camera
     /// faster than [`Config::max_speed_m_s`].
     pub implausible_motions: u64,
-    /// Registrations ([A] or a recovery) not believed because their intensity and
+    /// Registrations (\[A\] or a recovery) not believed because their intensity and
     /// depth residuals both spread more than [`Config::max_spread_jump`] times wider
     /// than the recent frame-to-frame registrations' ([`crate::spread`]).
     pub spread_jumps: u64,
@@ -117,10 +117,10 @@ fn plausible_speed(motion: &Pose, dt: f64, max_speed: f64) -> bool {
     !(dt > 0.0) || motion.translation.vector.norm() <= max_speed * dt + SPEED_SLACK_M
 }
 
-/// Whether a registration `r` ([A] or a recovery) by which the camera moved `moved`
+/// Whether a registration `r` (\[A\] or a recovery) by which the camera moved `moved`
 /// from the previous frame, `dt` seconds before, is believed: the speed stays under
 /// [`Config::max_speed_m_s`], and its intensity and depth residuals do not both spread
-/// more than [`Config::max_spread_jump`] times wider than the recent [A]s' (checked
+/// more than [`Config::max_spread_jump`] times wider than the recent \[A\]s' (checked
 /// with bivariate weighting only, the one that estimates the two spreads apart). A
 /// refusal is counted (`implausible_motions`, `spread_jumps`).
 fn believable(
@@ -155,14 +155,14 @@ pub const MAX_REFUSED_CORRECTIONS: u32 = 3;
 pub struct Velocity {
     /// Index of the frame it ends at.
     pub index: u64,
-    /// Its [A]: `T_{c,p}`.
+    /// Its \[A\]: `T_{c,p}`.
     pub motion: Pose,
     /// Time between the two frames (seconds).
     pub dt: f64,
 }
 
 /// The constant-velocity prediction of `T_{c,p}` for a frame `dt` seconds after its
-/// previous one, from the previous frame's [A] `v` over `v.dt` seconds: `v`'s twist
+/// previous one, from the previous frame's \[A\] `v` over `v.dt` seconds: `v`'s twist
 /// scaled by `dt / v.dt` (at most 4, and `v` itself when the stamps cannot say).
 /// `None` when there is nothing to predict (no motion, or a non-finite one).
 pub fn predict(v: &Velocity, dt: f64) -> Option<Pose> {
@@ -202,10 +202,10 @@ pub struct Tracker<F> {
     velocity: Option<Velocity>,
     /// Refused corrections in a row against each level's current reference.
     refused: Vec<u32>,
-    /// Residual spreads of the last believed [A]s.
+    /// Residual spreads of the last believed \[A\]s.
     spread: SpreadWatch,
     /// Covariance of the motion chained frame to frame since each level's reference
-    /// (the believed [A]s' inverse information matrices, carried along by
+    /// (the believed \[A\]s' inverse information matrices, carried along by
     /// [`chain_step`]; `None` after a recovery or a loss, when the chain is broken, and
     /// while `Config::fuse_corrections` is off): [`fuse_correction`].
     chain: Vec<Option<Matrix6<f64>>>,
@@ -266,7 +266,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         self.velocity.as_ref()
     }
 
-    /// The constant-velocity prediction of [A] for a frame stamped `timestamp` that
+    /// The constant-velocity prediction of \[A\] for a frame stamped `timestamp` that
     /// registers against the previous frame, or `None` (the identity alone).
     pub fn prior_for(&self, timestamp: f64) -> Option<Pose> {
         if self.config.motion.prior != MotionPrior::ConstantVelocity {
@@ -282,11 +282,11 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         self.track_with(frame, |_, _| None)
     }
 
-    /// Tracks one prepared frame whose [A] may have been computed ahead of time:
+    /// Tracks one prepared frame whose \[A\] may have been computed ahead of time:
     /// `ahead` is given the previous frame the tracker registers against and the
     /// prediction it starts from, and returns [`frame_to_frame`]`(frame, previous,
     /// prior)` if it was computed for exactly those, `None` otherwise (then the
-    /// tracker computes it). [A] depends on nothing but the two frames and the
+    /// tracker computes it). \[A\] depends on nothing but the two frames and the
     /// prior, so the output is the same either way, bit for bit.
     pub fn track_with(
         &mut self,
@@ -443,7 +443,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         out
     }
 
-    /// [A] failed: registers the frame against the kept references (level 1 first,
+    /// \[A\] failed: registers the frame against the kept references (level 1 first,
     /// each frame once), seeded with the predicted pose. Returns the pose found, if
     /// it is a believable move from the previous frame, `dt` seconds before.
     fn recover(
@@ -541,7 +541,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
     }
 }
 
-/// [A] of Figure 1(b): `MOTION(Fc, Fp, ·)`, the motion from the current frame to the
+/// \[A\] of Figure 1(b): `MOTION(Fc, Fp, ·)`, the motion from the current frame to the
 /// previous one, from the identity and, when given, from the constant-velocity
 /// prediction `prior` (the better start at the coarsest step wins). It depends on
 /// the two frames and the prior alone, so it may run before the tracker reaches

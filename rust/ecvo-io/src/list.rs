@@ -125,7 +125,7 @@ pub const MAX_CANDIDATES_PER_SIDE: usize = 8;
 /// the result is sorted by the index into `first`.
 ///
 /// Unlike `associate.py`, a timestamp of `first` considers only the
-/// [`MAX_CANDIDATES_PER_SIDE`] nearest timestamps of `second` on each side of it (real
+/// `MAX_CANDIDATES_PER_SIDE` nearest timestamps of `second` on each side of it (real
 /// streams have one or two within `max_dt`), so that hostile lists with thousands of
 /// timestamps within `max_dt` cost linear memory instead of quadratic.
 pub fn associate_stamps(first: &[f64], second: &[f64], max_dt: f64) -> Vec<(usize, usize)> {

@@ -1,5 +1,5 @@
 //! The filter stage's side of the constant-velocity prior: which prior the tracker
-//! will start a frame's [A] from, as far as the filter stage can know it, so that [A]
+//! will start a frame's \[A\] from, as far as the filter stage can know it, so that \[A\]
 //! computed ahead is the tracker's own computation.
 
 use ecvo_core::tracker::{Velocity, predict};
@@ -7,7 +7,7 @@ use ecvo_core::{Config, MotionPrior, Pose};
 
 use crate::pool::{Ahead, PooledFrame};
 
-/// A frame's [A] as the next prediction needs it: motion and interval, `None` when it
+/// A frame's \[A\] as the next prediction needs it: motion and interval, `None` when it
 /// failed (nothing to predict from).
 pub(crate) type Link = Option<(Pose, f64)>;
 
@@ -15,25 +15,25 @@ pub(crate) type Link = Option<(Pose, f64)>;
 pub(crate) type Published = Option<(u64, Link)>;
 
 /// The filter stage's knowledge of the tracker's constant-velocity prediction: the
-/// tracker predicts a frame's [A] from the previous frame's [A] (when that one
-/// registered), so the filter stage can compute [A] ahead with the same prior only
-/// if it computed the previous frame's [A] itself. The tracker checks the prior
+/// tracker predicts a frame's \[A\] from the previous frame's \[A\] (when that one
+/// registered), so the filter stage can compute \[A\] ahead with the same prior only
+/// if it computed the previous frame's \[A\] itself. The tracker checks the prior
 /// before it uses a result, so a wrong guess here costs time, never a pose.
 #[derive(Default)]
 pub(crate) struct Chain {
     /// Frames prepared so far.
     prepared: u64,
-    /// Sequence and timestamp of the last frame prepared, and its [A] if this stage
+    /// Sequence and timestamp of the last frame prepared, and its \[A\] if this stage
     /// computed it: `Some(None)` when it failed (nothing to predict from).
     last: Option<(u64, f64, Option<Link>)>,
 }
 
 impl Chain {
-    /// Whether to compute [A] ahead for a frame stamped `timestamp` registered
+    /// Whether to compute \[A\] ahead for a frame stamped `timestamp` registered
     /// against `prev`, and with which prior (`Some(prior)`), or not (`None`). Without
     /// the constant-velocity prior: whenever the tracker is `behind`. With it, only
     /// when the prior is known: `prev` is the first frame, or this stage computed
-    /// `prev`'s [A] itself (its chain, which it then keeps going whatever the
+    /// `prev`'s \[A\] itself (its chain, which it then keeps going whatever the
     /// tracker's load when `offline`; live, where latency counts, only while the
     /// tracker is behind), or the tracker has just `published` its velocity after
     /// `prev` (it is idle, so the chain restarts at no cost in latency).
@@ -79,7 +79,7 @@ impl Chain {
         }))
     }
 
-    /// Records a prepared frame and the [A] computed ahead for it, if any.
+    /// Records a prepared frame and the \[A\] computed ahead for it, if any.
     pub(crate) fn prepared(&mut self, sequence: u64, timestamp: f64, ahead: Option<&Ahead>) {
         let prev_stamp = self.last.map(|(_, t, _)| t);
         let a = ahead.map(|a| {

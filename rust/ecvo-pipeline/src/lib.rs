@@ -23,7 +23,7 @@
 //!   two let filter and tracker overlap, and at 640x480 a free thread also takes
 //!   chunks of the other stage's loops.
 //! - **Load sharing**: when the tracker is behind (its queue is full, so the filter
-//!   would wait anyway), the filter stage also computes the new frame's [A],
+//!   would wait anyway), the filter stage also computes the new frame's \[A\],
 //!   `frame_to_frame(current, previous)`, which depends on the two frames alone; the
 //!   tracker uses it when that previous frame is still its previous frame (not
 //!   lost, not dropped) and computes it itself otherwise
@@ -44,7 +44,7 @@
 //! - **Determinism**: offline, the poses are bit-for-bit those of the sequential
 //!   [`ecvo_core::Odometry`] on the same stream, whatever the number of threads:
 //!   every frame is prepared and tracked exactly once, in order, by the same code
-//!   (ecvo-core's parallel loops sum over fixed chunks in a fixed order, and an [A]
+//!   (ecvo-core's parallel loops sum over fixed chunks in a fixed order, and an \[A\]
 //!   computed ahead is the same computation on the same two frames).
 //! - **Failure**: a panic in a stage is caught, closes every queue (so nothing
 //!   waits for it) and is returned to the caller as [`Error::StagePanicked`] by the

@@ -27,7 +27,7 @@ pub(crate) struct FrameMeta {
     pub sequence: u64,
     /// When `push` was called.
     pub pushed_at: Instant,
-    /// [A] for this frame, computed by the filter stage while the tracker was behind.
+    /// \[A\] for this frame, computed by the filter stage while the tracker was behind.
     pub ahead: Option<Ahead>,
 }
 

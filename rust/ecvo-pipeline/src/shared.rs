@@ -117,9 +117,9 @@ pub(crate) struct Shared {
     pub(crate) progress: Mutex<Progress>,
     pub(crate) progress_changed: Condvar,
     pub(crate) latest: Mutex<LatestPose>,
-    /// The tracker's velocity after its last frame: that frame's sequence and [A]
+    /// The tracker's velocity after its last frame: that frame's sequence and \[A\]
     /// (motion and interval) when it registered frame to frame. The filter stage
-    /// restarts its [A]-ahead chain from it.
+    /// restarts its \[A\]-ahead chain from it.
     pub(crate) velocity: Mutex<Published>,
     pub(crate) counters: Mutex<Counters>,
     /// The kept poses and reference records (`keep_trajectory`).

@@ -3,10 +3,10 @@
 use super::*;
 
 /// The filter stage: prepares each frame. While the tracker is behind (its queue is
-/// not empty), it also computes the frame's [A] against the frame it prepared just
+/// not empty), it also computes the frame's \[A\] against the frame it prepared just
 /// before, which is the tracker's previous frame unless that one is lost: the
 /// tracker then only corrects against its references, and the two stages share the
-/// work more evenly. [A] depends on the two frames alone, so the poses are the same.
+/// work more evenly. \[A\] depends on the two frames alone, so the poses are the same.
 pub(crate) fn filter_stage(
     s: &Shared,
     mut preparer: Preparer,

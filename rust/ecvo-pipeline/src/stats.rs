@@ -158,7 +158,7 @@ pub struct PipelineStats {
     pub geometry_skipped: u64,
     /// Outputs not sent because the output queue was full (live mode only).
     pub outputs_discarded: u64,
-    /// Frames whose [A] (`frame_to_frame`) the filter stage computed ahead, because
+    /// Frames whose \[A\] (`frame_to_frame`) the filter stage computed ahead, because
     /// the tracker was behind.
     pub ahead_computed: u64,
     /// Of those, the ones the tracker used (the others were registered against an

@@ -235,8 +235,8 @@ fn a_panicking_fill_returns_the_buffer_and_the_pipeline_goes_on() {
     assert_eq!(p.finish().unwrap().stats.tracked, 3);
 }
 
-/// With a slow tracker the filter stage computes [A] ahead; a frame whose previous
-/// frame was lost must not use the [A] computed against it. Either way the poses
+/// With a slow tracker the filter stage computes \[A\] ahead; a frame whose previous
+/// frame was lost must not use the \[A\] computed against it. Either way the poses
 /// are those of the sequential engine, bit for bit.
 #[test]
 fn frame_to_frame_computed_ahead_gives_the_sequential_poses_even_around_lost_frames() {

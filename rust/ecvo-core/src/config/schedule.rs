@@ -138,7 +138,7 @@ impl std::str::FromStr for Schedule {
 /// `pyramid-stride2`, whose steps [`Schedule::levels_for`] gives), or
 /// steps written `LEVEL/STRIDE/ITERATIONS` or `LEVEL/STRIDE/ITERATIONS/POINTS` (a
 /// point budget, [`MotionLevel::max_points`]), comma-separated, coarsest first (e.g.
-/// `3/1/20,2/1/15,1/1/10,0/2/8`). Ranges are checked by [`Config::validate`].
+/// `3/1/20,2/1/15,1/1/10,0/2/8`). Ranges are checked by [`Config::validate`](crate::config::Config::validate).
 pub fn parse_schedule(s: &str, camera: &Camera) -> Result<Vec<MotionLevel>> {
     if let Ok(named) = s.parse::<Schedule>() {
         return Ok(named.levels_for(camera));
@@ -179,7 +179,7 @@ pub fn parse_schedule(s: &str, camera: &Camera) -> Result<Vec<MotionLevel>> {
 
 /// Parses per-level point budgets written `LEVEL=POINTS`, comma-separated, e.g.
 /// `1=4096,0=4096`; `POINTS` may be `all` (no budget). `none` or an empty string
-/// gives no entry. Apply them with [`MotionConfig::set_point_budget`].
+/// gives no entry. Apply them with [`MotionConfig::set_point_budget`](crate::config::MotionConfig::set_point_budget).
 pub fn parse_point_budget(s: &str) -> Result<Vec<(usize, Option<usize>)>> {
     let bad = |why: String| Error::InvalidConfig {
         field: "point_budget",

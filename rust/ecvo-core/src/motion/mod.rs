@@ -10,17 +10,19 @@
 //! and both share one weight from a bivariate t-distribution (ν = 5) whose 2x2 scale
 //! matrix over `(r_I, r_Z)` is re-fitted after every accepted update (see
 //! [`crate::scale`]; [`Weighting::Scalar`] is the special case of one σ² over
-//! `(r_I, λ r_Z)`). With [`DepthNoiseModel::Quadratic`] the depth residual is divided
-//! by z², so the scale describes the depth noise at 1 m and far points count less.
+//! `(r_I, λ r_Z)`). With
+//! [`DepthNoiseModel::Quadratic`](crate::config::DepthNoiseModel::Quadratic) the depth
+//! residual is divided by z², so the scale describes the depth noise at 1 m and far
+//! points count less.
 //! Gauss-Newton on a left perturbation `T ← exp(δ) T` runs coarse to fine on the image
 //! pyramid; an update that raises the robust cost at its scale, or leaves too few
 //! residuals, is undone and ends its step. The result reports `T_{i,j} = T⁻¹`, the
 //! motion that maps camera `i` coordinates into camera `j` coordinates.
 //!
-//! The per-point loops are structure-of-arrays ([`warp`], [`robust`], [`normal`]):
+//! The per-point loops are structure-of-arrays (`warp`, `robust`, `normal`):
 //! one `f32` slice per quantity, branch-free, summed over fixed lanes
-//! ([`lanes`]), with AVX2 copies chosen at run time on x86_64; every path gives the
-//! same bits.
+//! (`lanes`), with AVX2 and AVX-512 copies chosen at run time on x86_64; every path
+//! gives the same bits.
 
 mod estimator;
 pub use estimator::MAX_SCALE_PASSES;

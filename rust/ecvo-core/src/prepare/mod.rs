@@ -18,21 +18,21 @@
 //!
 //! The work is a few passes, each reading what the last one wrote and nothing else:
 //!
-//! 1. raw depth to metres, into a zero-padded buffer ([`bilateral::load_padded`]);
-//! 2. the bilateral filter ([`bilateral`]), row-parallel;
+//! 1. raw depth to metres, into a zero-padded buffer (`bilateral::load_padded`);
+//! 2. the bilateral filter (`bilateral`), row-parallel;
 //! 3. back-projection, both normals and the contour test in one pass
-//!    ([`removal::normals_and_seeds`]), row-parallel: the points are recomputed from
+//!    (`removal::normals_and_seeds`), row-parallel: the points are recomputed from
 //!    the smoothed depth where they are needed, never stored;
 //! 4. the masks applied (the contour seeds dilated 3x3 on the fly) into compact
-//!    intensity and depth planes of level 0 ([`removal::apply_masks`]);
+//!    intensity and depth planes of level 0 (`removal::apply_masks`);
 //! 5. per level, the interleaved samples with their gradients, written once from
-//!    the compact planes, and the next level's planes ([`pyramid`]);
+//!    the compact planes, and the next level's planes (`pyramid`);
 //! 6. the templates.
 //!
 //! The per-pixel kernels are written branch-free over whole rows so that the
 //! compiler vectorises them (SSE2 on x86_64, NEON on aarch64); on x86_64 the two
 //! heavy ones are compiled a second time for AVX2 and picked at run time
-//! ([`simd`]). Every pixel goes through the same IEEE operations in the same order
+//! (`simd`). Every pixel goes through the same IEEE operations in the same order
 //! as in a scalar loop (no fused multiply-add), so the output is the same bit for
 //! bit on every path.
 
@@ -110,7 +110,7 @@ pub struct Template {
     /// Pyramid level the points were taken from.
     pub pyramid_level: usize,
     /// Valid points of that level, every `stride`-th pixel (at most the step's
-    /// `max_points` of them, chosen by [`select`]), row-major.
+    /// `max_points` of them, chosen by `select`), row-major.
     pub points: Vec<[f32; 4]>,
 }
 
