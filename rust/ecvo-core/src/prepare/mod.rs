@@ -30,9 +30,9 @@
 //! 6. the templates.
 //!
 //! The per-pixel kernels are written branch-free over whole rows so that the
-//! compiler vectorises them (SSE2 on x86_64, NEON on aarch64); on x86_64 the two
-//! heavy ones are compiled a second time for AVX2 and picked at run time
-//! (`simd`). Every pixel goes through the same IEEE operations in the same order
+//! compiler vectorises them (SSE2 on x86_64, NEON on aarch64); on x86_64 the heavy
+//! ones are compiled again for AVX2 and for AVX-512, and the widest copy the CPU has
+//! runs (`simd`). Every pixel goes through the same IEEE operations in the same order
 //! as in a scalar loop (no fused multiply-add), so the output is the same bit for
 //! bit on every path.
 
