@@ -16,39 +16,39 @@
 //! `ECVO_NO_AVX512=1` against the default on an AVX-512 CPU (AMD EPYC, Zen 4), the
 //! AVX-512 copies make `prepare/320x180` about 1.5x faster again (`docs/profile.md`).
 
-/// Whether the AVX2 copies may run: the CPU has AVX2, and `ECVO_NO_AVX2` is unset
-/// (to measure or test the baseline path on the same machine).
+/// The widest copies this CPU may run: 0 the baseline, 1 AVX2 (the CPU has it and
+/// `ECVO_NO_AVX2` is unset), 2 AVX-512 (also F, VL, BW and DQ, and `ECVO_NO_AVX512`
+/// unset). The variables measure or test the narrower paths on the same machine.
 #[cfg(target_arch = "x86_64")]
-pub(crate) fn avx2() -> bool {
+fn widest() -> u8 {
     use std::sync::OnceLock;
-    static AVX2: OnceLock<bool> = OnceLock::new();
+    static WIDEST_CPU: OnceLock<u8> = OnceLock::new();
+    let cpu = *WIDEST_CPU.get_or_init(|| {
+        let off = |v: &str| std::env::var_os(v).is_some();
+        let avx2 = !off("ECVO_NO_AVX2") && std::arch::is_x86_feature_detected!("avx2");
+        let avx512 = avx2
+            && !off("ECVO_NO_AVX512")
+            && std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+            && std::arch::is_x86_feature_detected!("avx512bw")
+            && std::arch::is_x86_feature_detected!("avx512dq");
+        avx2 as u8 + avx512 as u8
+    });
     #[cfg(test)]
-    if WIDEST.load(std::sync::atomic::Ordering::Relaxed) < 1 {
-        return false;
-    }
-    *AVX2.get_or_init(|| {
-        std::env::var_os("ECVO_NO_AVX2").is_none() && std::arch::is_x86_feature_detected!("avx2")
-    })
+    let cpu = cpu.min(WIDEST.load(std::sync::atomic::Ordering::Relaxed));
+    cpu
 }
 
-/// Whether the AVX-512 copies may run: the AVX2 copies may ([`avx2`]), the CPU has
-/// AVX-512 F, VL, BW and DQ, and `ECVO_NO_AVX512` is unset.
+/// Whether the AVX2 copies may run ([`widest`]).
+#[cfg(target_arch = "x86_64")]
+pub(crate) fn avx2() -> bool {
+    widest() >= 1
+}
+
+/// Whether the AVX-512 copies may run ([`widest`]).
 #[cfg(target_arch = "x86_64")]
 pub(crate) fn avx512() -> bool {
-    use std::sync::OnceLock;
-    static AVX512: OnceLock<bool> = OnceLock::new();
-    #[cfg(test)]
-    if WIDEST.load(std::sync::atomic::Ordering::Relaxed) < 2 {
-        return false;
-    }
-    avx2()
-        && *AVX512.get_or_init(|| {
-            std::env::var_os("ECVO_NO_AVX512").is_none()
-                && std::arch::is_x86_feature_detected!("avx512f")
-                && std::arch::is_x86_feature_detected!("avx512vl")
-                && std::arch::is_x86_feature_detected!("avx512bw")
-                && std::arch::is_x86_feature_detected!("avx512dq")
-        })
+    widest() >= 2
 }
 
 /// Tests lower this to run the narrower copies: 0 the baseline only, 1 at most AVX2,
