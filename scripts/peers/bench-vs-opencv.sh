@@ -10,7 +10,8 @@
 # not counted), then OpenCV's RGB-D odometry through peers.py (`--peers opencv-rgbd`:
 # the median CPU time of making the OdometryFrame, prepareFrame and compute, one
 # thread; decoding not counted). Prints one row per round and, per sequence, the
-# median, min and max of the per-round ratio OpenCV / ecvo. Writes DIR/bench.json
+# median, min and max of the per-round ratio OpenCV / ecvo, and which kernel copies
+# ecvo ran (summary.json's `simd`: avx512, avx2, sse2, neon). Writes DIR/bench.json
 # (default DIR target/bench-vs-opencv). Same set-up as run-peers.sh (venv, ECVO).
 set -euo pipefail
 
@@ -28,7 +29,7 @@ while [[ $# -gt 0 ]]; do
         --frame-step) step=$2; shift 2 ;;
         --out) out=$2; shift 2 ;;
         --) shift; extra=("$@"); break ;;
-        -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
         -*) echo "unknown option $1" >&2; exit 2 ;;
         *) seqs+=("$1"); shift ;;
     esac
@@ -61,12 +62,13 @@ for seq in "${seqs[@]}"; do
         "$venv/bin/python" - "$dir" "$name" "$r" >> "$results" <<'EOF'
 import json, sys
 d, name, r = sys.argv[1:]
-s = json.load(open(f"{d}/ecvo/summary.json"))["ms_per_frame"]
+summary = json.load(open(f"{d}/ecvo/summary.json"))
+s = summary["ms_per_frame"]
 e = s["filter"]["median"] + s["tracker"]["median"]
 o = json.load(open(f"{d}/opencv/peers.json"))["rows"][0]["ms_per_frame_median"]
-print(f"{name}\t{r}\t{e:.3f}\t{o:.3f}\t{o / e:.3f}")
+print(f"{name}\t{r}\t{e:.3f}\t{o:.3f}\t{o / e:.3f}\t{summary.get('simd', '?')}")
 EOF
-        tail -1 "$results" | awk -F'\t' '{printf "%s round %s: ecvo %.2f ms/frame, OpenCV RGB-D %.2f ms/frame, ratio %.2f\n", $1, $2, $3, $4, $5}'
+        tail -1 "$results" | awk -F'\t' '{printf "%s round %s: ecvo (%s) %.2f ms/frame, OpenCV RGB-D %.2f ms/frame, ratio %.2f\n", $1, $2, $6, $3, $4, $5}'
     done
 done
 
@@ -74,8 +76,10 @@ done
 import json, statistics, sys
 rows = [l.rstrip("\n").split("\t") for l in open(sys.argv[1]) if l.strip()]
 by = {}
-for name, r, e, o, q in rows:
+simd = sorted({row[5] for row in rows})
+for name, r, e, o, q, _ in rows:
     by.setdefault(name, []).append((float(e), float(o), float(q)))
+print(f"\necvo's kernels: {', '.join(simd)}")
 print("\n| sequence | rounds | ecvo ms/frame, median (min-max) | OpenCV RGB-D ms/frame | OpenCV / ecvo, median (min-max) |")
 print("|---|---|---|---|---|")
 out = {}
@@ -84,6 +88,6 @@ for name, v in by.items():
     f = lambda x: f"{statistics.median(x):.2f} ({min(x):.2f}-{max(x):.2f})"
     print(f"| {name} | {len(v)} | {f(e)} | {f(o)} | **{f(q)}** |")
     out[name] = {"ecvo_ms": e, "opencv_ms": o, "ratio": q,
-                 "ratio_median": statistics.median(q)}
+                 "ratio_median": statistics.median(q), "ecvo_simd": simd}
 json.dump(out, open(sys.argv[2], "w"), indent=2)
 EOF

@@ -475,7 +475,7 @@ fn summary_json(
     let c = &t.run.counters;
     let cam = t.sequence.camera();
     let f = &t.config.filter;
-    json!({
+    let mut summary = json!({
         "ecvo_version": env!("CARGO_PKG_VERSION"),
         "sequence": seq.display().to_string(),
         "mode": mode_name(settings.mode),
@@ -530,7 +530,10 @@ fn summary_json(
             "pixel_stride": outs.cloud_stride,
             "every_nth_frame": (settings.mode == Mode::Naive).then_some(outs.cloud_every),
         },
-    })
+    });
+    // Which kernel copies ran (same poses on every path): what the times measured.
+    summary["simd"] = json!(ecvo_core::simd_path());
+    summary
 }
 
 /// The `pipeline` object of summary.json: what the pipeline did besides tracking.

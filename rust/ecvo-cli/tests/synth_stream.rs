@@ -84,6 +84,15 @@ fn l1_levels_override_and_filter_flags() {
     assert!(s["filters"]["contour_angle_deg"].is_null());
     assert_eq!(s["filters"]["normal_max_angle_deg"].as_f64(), Some(28.0));
     assert_eq!(s["threads"].as_u64(), Some(3));
+    let simd = s["simd"].as_str().unwrap_or_default();
+    let paths: &[&str] = if cfg!(target_arch = "x86_64") {
+        &["sse2", "avx2", "avx512"]
+    } else if cfg!(target_arch = "aarch64") {
+        &["neon"]
+    } else {
+        &["portable"]
+    };
+    assert!(paths.contains(&simd), "simd {simd:?}: {s}");
     assert!(s["ate_rmse_m"].as_f64().unwrap() < L2_ATE_BOUND_M, "{s}");
     check_files(&out, &s);
 }

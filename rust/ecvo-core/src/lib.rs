@@ -34,6 +34,7 @@ pub use config::{
 pub use error::{Error, Result};
 pub use motion::{MotionEstimator, MotionResult};
 pub use nalgebra;
+pub use prepare::simd::path_name as simd_path;
 pub use prepare::{PreparedFrame, Preparer};
 pub use tracker::{Counters, FrameOutput, Odometry, Tracker, TrackingState, comp, frame_to_frame};
 

@@ -51,6 +51,25 @@ pub(crate) fn avx512() -> bool {
     widest() >= 2
 }
 
+/// The instruction set of the widest kernel copies this process runs: `"avx512"`,
+/// `"avx2"` or `"sse2"` on x86_64 (after `ECVO_NO_AVX512` and `ECVO_NO_AVX2`),
+/// `"neon"` on aarch64, `"portable"` elsewhere. Every path gives the same poses; this
+/// says which one a timing measured.
+pub fn path_name() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    {
+        ["sse2", "avx2", "avx512"][widest() as usize]
+    }
+    #[cfg(target_arch = "aarch64")]
+    {
+        "neon"
+    }
+    #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+    {
+        "portable"
+    }
+}
+
 /// Tests lower this to run the narrower copies: 0 the baseline only, 1 at most AVX2,
 /// 2 (the default) any. Every copy gives the same bits, so tests running meanwhile
 /// are not affected.
