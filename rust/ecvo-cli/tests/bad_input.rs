@@ -279,4 +279,13 @@ fn synth_refuses_to_overwrite_and_checks_flags() {
     ]);
     fails(&o, &["--noise"]);
     assert_eq!(o.status.code(), Some(2));
+    let o = run(&[
+        "synth",
+        "--out",
+        dir.join("u").to_str().unwrap(),
+        "--size",
+        "100x100",
+    ]);
+    fails(&o, &["--size"]);
+    assert_eq!(o.status.code(), Some(2));
 }
