@@ -65,7 +65,7 @@ fn camera(w: usize, h: usize) -> Camera {
 
 #[test]
 fn blocked_bilateral_equals_the_clipped_filter_bit_for_bit() {
-    // Sizes around the 64-pixel blocks, holes, depth steps and slopes.
+    // Sizes around the 16-pixel blocks, holes, depth steps and slopes.
     for (w, h, r, sr) in [
         (37, 23, 1, 0.02),
         (150, 41, 2, 0.02),
