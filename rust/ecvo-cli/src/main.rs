@@ -209,6 +209,10 @@ struct TrackArgs {
     /// until the cost rises or the iterations run out, as --paper does).
     #[arg(long)]
     min_predicted_decrease: Option<f64>,
+    /// Stop a coarse-to-fine level after an update that moves the image by less than
+    /// this many of the level's pixels (0: off, as --paper does).
+    #[arg(long)]
+    min_update_px: Option<f64>,
     /// Fixed-point passes of the scale fit after each accepted update, 1 to 20 (1:
     /// the scale follows the iterations; 20: it converges at every one, as --paper
     /// does).
@@ -280,6 +284,7 @@ impl TrackArgs {
             max_correction_distance: self.max_correction_distance,
             max_fine_depth_weight: self.max_fine_depth_weight,
             min_predicted_decrease: self.min_predicted_decrease,
+            min_update_px: self.min_update_px,
             scale_passes: self.scale_passes,
             fuse_corrections: self.corrections.map(|c| matches!(c, CorrectionsArg::Fuse)),
         };

@@ -69,6 +69,8 @@ pub struct EngineChoice {
     pub fuse_corrections: Option<bool>,
     /// A level's Gauss-Newton stops below this predicted relative decrease.
     pub min_predicted_decrease: Option<f64>,
+    /// A level's Gauss-Newton stops after an update below this many pixels of flow.
+    pub min_update_px: Option<f64>,
     /// Scale fit passes after an accepted update.
     pub scale_passes: Option<usize>,
 }
@@ -102,7 +104,7 @@ impl EngineChoice {
             |s| s.name().to_string(),
         );
         format!(
-            "schedule {schedule}, {} weighting, {:?} depth noise, {:?} prior, correction gate {}, corrections {}, stop below a predicted decrease of {}, {} scale pass(es) per update",
+            "schedule {schedule}, {} weighting, {:?} depth noise, {:?} prior, correction gate {}, corrections {}, stop below a predicted decrease of {} or an update of {} px, {} scale pass(es) per update",
             match m.fine_weighting {
                 Some(f) if f != m.weighting =>
                     format!("{:?} then {:?} at the finest step", m.weighting, f),
@@ -119,6 +121,7 @@ impl EngineChoice {
             config.max_correction_distance,
             if config.fuse_corrections { "fused" } else { "replaced" },
             m.min_predicted_decrease,
+            m.min_update_px,
             m.scale_passes_per_update
         )
         .to_lowercase()
@@ -204,6 +207,9 @@ impl TrackSettings {
         }
         if let Some(d) = e.min_predicted_decrease {
             config.motion.min_predicted_decrease = d;
+        }
+        if let Some(d) = e.min_update_px {
+            config.motion.min_update_px = d;
         }
         if let Some(n) = e.scale_passes {
             config.motion.scale_passes_per_update = n;

@@ -166,6 +166,12 @@ pub struct MotionConfig {
     /// Stop a level when the update's translation (m) and rotation (rad) are both
     /// below this.
     pub min_update: f64,
+    /// Stop a level after an accepted update that moves the image by less than this
+    /// many of the level's pixels: a bound on the flow of the update at the template's
+    /// mean inverse depth, `(f + r) (|v| E[1/z] + |ω|)` for the level's focal length
+    /// `f` and half-diagonal `r` (pixels). A coarse level only has to bring the next
+    /// one into its basin; updates far below its pixel are noise. 0 switches it off.
+    pub min_update_px: f64,
     /// Stop a level, without taking the update, when the Gauss-Newton model predicts
     /// that it lowers the weighted squared error `Σ w d²` by less than this fraction
     /// (`−gᵀδ = gᵀH⁻¹g` against `Σ w d²`; the first iteration of a level always runs).
@@ -321,6 +327,7 @@ impl Config {
                 t_dof: 5.0,
                 levels: Schedule::PyramidStride2.levels_for(&camera),
                 min_update: 1e-6,
+                min_update_px: 0.1,
                 min_predicted_decrease: 1e-3,
                 scale_tolerance: 1e-2,
                 scale_passes_per_update: 1,
@@ -356,6 +363,7 @@ impl Config {
         c.motion.levels = Schedule::PaperSampling.levels_for(&camera);
         c.motion.scale_tolerance = 1e-3;
         c.motion.min_predicted_decrease = 0.0;
+        c.motion.min_update_px = 0.0;
         c.motion.scale_passes_per_update = crate::motion::MAX_SCALE_PASSES;
         c.motion.weighting = Weighting::Scalar;
         c.motion.depth_noise = DepthNoiseModel::Constant;
@@ -468,6 +476,12 @@ impl Config {
             return bad(
                 "motion.min_update",
                 format!("{} is not positive", m.min_update),
+            );
+        }
+        if !(m.min_update_px >= 0.0 && m.min_update_px.is_finite()) {
+            return bad(
+                "motion.min_update_px",
+                format!("{} is not a finite non-negative number", m.min_update_px),
             );
         }
         if !(m.min_predicted_decrease >= 0.0 && m.min_predicted_decrease < 1.0) {

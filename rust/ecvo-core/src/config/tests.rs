@@ -115,6 +115,11 @@ fn validate_rejects_bad_fields() {
         &[-1e-3, 1.0, f64::NAN, f64::INFINITY],
         |c, v| c.motion.min_predicted_decrease = v,
     );
+    rejected(
+        "motion.min_update_px",
+        &[-0.01, f64::NAN, f64::INFINITY],
+        |c, v| c.motion.min_update_px = v,
+    );
     for bad in [0, 21] {
         let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
         c.motion.scale_passes_per_update = bad;
@@ -128,7 +133,8 @@ fn validate_rejects_bad_fields() {
     }
     let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
     c.motion.min_predicted_decrease = 0.0;
-    assert!(c.validate().is_ok(), "0 switches the stop off");
+    c.motion.min_update_px = 0.0;
+    assert!(c.validate().is_ok(), "0 switches the stops off");
     let mut c = Config::new(cam(), Preset::Pc, Mode::L2);
     c.max_spread_jump = f64::INFINITY;
     c.motion.max_fine_depth_weight = f64::INFINITY;

@@ -143,6 +143,13 @@ pub(super) fn motion_from<K: Loops>(
         else {
             break;
         };
+        // `E[1/z]` over the template, for the flow of an update (`min_update_px`).
+        let inv_depth = if cfg.min_update_px > 0.0 && !template.points.is_empty() {
+            let s: f64 = template.points.iter().map(|q| 1.0 / q[2] as f64).sum();
+            s / template.points.len() as f64
+        } else {
+            0.0
+        };
         let pk = match fine {
             Some(weighting) if k == finest => {
                 fine_level = Some(level);
@@ -157,11 +164,20 @@ pub(super) fn motion_from<K: Loops>(
         let start = if fine_level.is_some() { None } else { scale };
         lp.load(&template.points);
         let out = if k == 0 && inits.len() > 1 {
-            let (best, out) = best_start(lp, level, template.points.len(), inits, step, cfg, &pk);
+            let (best, out) = best_start(
+                lp,
+                level,
+                template.points.len(),
+                inits,
+                step,
+                cfg,
+                &pk,
+                inv_depth,
+            );
             result.start = best as u8;
             out
         } else {
-            run_step(lp, level, t, step, cfg, &pk, start)
+            run_step(lp, level, t, step, cfg, &pk, start, inv_depth)
         };
         result.iterations[k] = out.iterations;
         t = out.t;
@@ -235,11 +251,21 @@ fn best_start<K: Loops>(
     step: &MotionLevel,
     cfg: &MotionConfig,
     p: &Params,
+    inv_depth: f64,
 ) -> (usize, StepOutcome) {
     // On the stack: a warm estimator does not allocate.
     let mut slots: [Option<StepOutcome>; MAX_STARTS] = [None; MAX_STARTS];
     for (slot, init) in slots.iter_mut().zip(inits) {
-        *slot = Some(run_step(lp, level, init.inverse(), step, cfg, p, None));
+        *slot = Some(run_step(
+            lp,
+            level,
+            init.inverse(),
+            step,
+            cfg,
+            p,
+            None,
+            inv_depth,
+        ));
     }
     let outs = slots.iter().flatten();
     // A common scale: the first guess's (the identity's, for [A]).
@@ -280,7 +306,13 @@ fn run_step<K: Loops>(
     cfg: &MotionConfig,
     p: &Params,
     start: Option<Scale>,
+    inv_depth: f64,
 ) -> StepOutcome {
+    // Pixels of flow per unit of `|v| E[1/z] + |ω|` at this level (see
+    // `MotionConfig::min_update_px`).
+    let px_per_unit = level.camera.map_or(0.0, |c| {
+        c.fx.max(c.fy) + 0.5 * ((c.width * c.width + c.height * c.height) as f64).sqrt()
+    });
     let mut out = StepOutcome {
         t,
         ne: None,
@@ -341,8 +373,12 @@ fn run_step<K: Loops>(
             wh = p.whitener(&scale);
         }
         stale = true;
-        let small = delta.fixed_rows::<3>(0).norm() < cfg.min_update
-            && delta.fixed_rows::<3>(3).norm() < cfg.min_update;
+        let (v, w) = (
+            delta.fixed_rows::<3>(0).norm(),
+            delta.fixed_rows::<3>(3).norm(),
+        );
+        let small = (v < cfg.min_update && w < cfg.min_update)
+            || px_per_unit * (v * inv_depth + w) < cfg.min_update_px;
         if small {
             out.hit_max = false;
             break;
