@@ -143,10 +143,15 @@ pub(super) fn motion_from<K: Loops>(
         else {
             break;
         };
-        // `E[1/z]` over the template, for the flow of an update (`min_update_px`).
+        // `E[1/z]` over every 8th template point, for the flow of an update
+        // (`min_update_px`): a threshold's estimate, at an eighth of the cost.
         let inv_depth = if cfg.min_update_px > 0.0 && !template.points.is_empty() {
-            let s: f64 = template.points.iter().map(|q| 1.0 / q[2] as f64).sum();
-            s / template.points.len() as f64
+            let (s, n) = template
+                .points
+                .iter()
+                .step_by(8)
+                .fold((0.0f64, 0usize), |(s, n), q| (s + 1.0 / q[2] as f64, n + 1));
+            s / n as f64
         } else {
             0.0
         };
