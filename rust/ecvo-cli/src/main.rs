@@ -12,6 +12,7 @@
 mod engine;
 mod plot;
 mod run;
+mod settings;
 mod stats;
 mod synth;
 mod table;
@@ -26,7 +27,8 @@ use ecvo_io::Trajectory;
 use serde_json::json;
 
 use crate::plot::Plane;
-use crate::run::{EngineChoice, Evaluation, RunOutputs, TrackSettings};
+use crate::run::{Evaluation, RunOutputs};
+use crate::settings::{EngineChoice, TrackSettings};
 use crate::synth::{Motion, Noise, Size};
 
 #[derive(Parser)]

@@ -10,7 +10,8 @@ use ecvo_core::Mode;
 use serde_json::json;
 
 use crate::engine::CloudFrames;
-use crate::run::{StageStats, TrackSettings, track};
+use crate::run::{StageStats, track};
+use crate::settings::TrackSettings;
 
 /// Tracks every sequence at every frame step in the three modes and prints one
 /// Markdown table per sequence; with `json`, also one JSON line per row.
@@ -92,7 +93,7 @@ pub fn table_command(
             out,
             "### {} (preset {}; {engine})\n",
             seq.display(),
-            crate::run::preset_name(base.preset)
+            crate::settings::preset_name(base.preset)
         );
         let _ = writeln!(
             out,

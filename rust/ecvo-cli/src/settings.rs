@@ -1,0 +1,243 @@
+//! How a sequence is tracked: the preset, mode, frame step and engine choices of
+//! `ecvo run` and `ecvo table`, and how they become a [`Config`].
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use ecvo_core::config::parse_levels;
+use ecvo_core::{Camera, Config, Mode, Preset, ReferenceLevel, Schedule};
+use ecvo_io::Sequence;
+
+/// Everything that decides how a sequence is tracked.
+#[derive(Clone, Debug)]
+pub struct TrackSettings {
+    /// Which error-correction levels run.
+    pub mode: Mode,
+    /// Which thresholds and filter angles to start from.
+    pub preset: Preset,
+    /// Reference levels overriding the preset's, as given on the command line.
+    pub levels: Option<String>,
+    /// Bilateral filter on depth.
+    pub bilateral: bool,
+    /// Normal-based removal filter.
+    pub normal_filter: bool,
+    /// Contour-based removal filter.
+    pub contour_filter: bool,
+    /// A camera.json overriding the sequence's.
+    pub camera: Option<PathBuf>,
+    /// Track only the first this many frames.
+    pub max_frames: Option<usize>,
+    /// Worker threads.
+    pub threads: usize,
+    /// Track every this-many-th frame.
+    pub frame_step: usize,
+    /// Which engine settings, beyond the preset's thresholds.
+    pub engine: EngineChoice,
+}
+
+/// The engine's method: ecvo's defaults, or the paper's as written, with single
+/// parts overridden.
+#[derive(Clone, Debug, Default)]
+pub struct EngineChoice {
+    /// Start from [`Config::paper`] instead of [`Config::new`].
+    pub paper: bool,
+    /// Coarse-to-fine schedule by name.
+    pub schedule: Option<String>,
+    /// Template point budgets, `LEVEL=POINTS,...`.
+    pub point_budget: Option<String>,
+    /// Residual weighting, and the finest step's if different.
+    pub weighting: Option<(ecvo_core::Weighting, Option<ecvo_core::Weighting>)>,
+    /// Depth noise model.
+    pub depth_noise: Option<ecvo_core::DepthNoiseModel>,
+    /// What [A] starts from.
+    pub prior: Option<ecvo_core::MotionPrior>,
+    /// Correction gate.
+    pub max_correction_distance: Option<f64>,
+    /// Cap on the depth residual's weight at the finest step.
+    pub max_fine_depth_weight: Option<f64>,
+    /// Fuse corrections with the chain (true) or replace it (false).
+    pub fuse_corrections: Option<bool>,
+    /// A level's Gauss-Newton stops below this predicted relative decrease.
+    pub min_predicted_decrease: Option<f64>,
+    /// A level's Gauss-Newton stops after an update below this many pixels of flow.
+    pub min_update_px: Option<f64>,
+    /// Scale fit passes after an accepted update.
+    pub scale_passes: Option<usize>,
+}
+
+impl EngineChoice {
+    /// A short description for tables and summaries.
+    pub fn describe(&self, config: &Config) -> String {
+        let m = &config.motion;
+        // The default first: on a large image the two pyramid schedules can give the
+        // same steps (`Schedule::levels_for`).
+        let schedule = [
+            Schedule::PyramidStride2,
+            Schedule::PaperSampling,
+            Schedule::Pyramid,
+        ]
+        .into_iter()
+        .find(|s| s.levels_for(&config.camera) == m.levels)
+        .map_or_else(
+            || {
+                m.levels
+                    .iter()
+                    .map(|l| match l.max_points {
+                        None => format!("{}/{}/{}", l.pyramid_level, l.stride, l.max_iterations),
+                        Some(n) => {
+                            format!("{}/{}/{}/{n}", l.pyramid_level, l.stride, l.max_iterations)
+                        }
+                    })
+                    .collect::<Vec<_>>()
+                    .join(",")
+            },
+            |s| s.name().to_string(),
+        );
+        format!(
+            "schedule {schedule}, {} weighting, {:?} depth noise, {:?} prior, correction gate {}, corrections {}, stop below a predicted decrease of {} or an update of {} px, {} scale pass(es) per update",
+            match m.fine_weighting {
+                Some(f) if f != m.weighting =>
+                    format!("{:?} then {:?} at the finest step", m.weighting, f),
+                _ if m.weighting == ecvo_core::Weighting::Bivariate
+                    && m.max_fine_depth_weight.is_finite() =>
+                    format!(
+                        "bivariate (depth at most {}x at the finest step)",
+                        m.max_fine_depth_weight
+                    ),
+                _ => format!("{:?}", m.weighting),
+            },
+            m.depth_noise,
+            m.prior,
+            config.max_correction_distance,
+            if config.fuse_corrections { "fused" } else { "replaced" },
+            m.min_predicted_decrease,
+            m.min_update_px,
+            m.scale_passes_per_update
+        )
+        .to_lowercase()
+    }
+}
+
+/// Name of a mode as the command line spells it.
+pub fn mode_name(mode: Mode) -> &'static str {
+    match mode {
+        Mode::Naive => "naive",
+        Mode::L1 => "l1",
+        Mode::L2 => "l2",
+    }
+}
+
+/// Name of a preset as the command line spells it.
+pub fn preset_name(preset: Preset) -> &'static str {
+    match preset {
+        Preset::Pc => "pc",
+        Preset::Phone => "phone",
+    }
+}
+
+/// Levels written as `--levels` takes them (`30mm:7deg,120mm:12deg`).
+pub fn levels_string(levels: &[ReferenceLevel]) -> String {
+    if levels.is_empty() {
+        return "none".into();
+    }
+    levels
+        .iter()
+        .map(|l| format!("{}mm:{}deg", l.max_distance_m * 1000.0, l.max_angle_deg))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+impl TrackSettings {
+    /// Opens the sequence, with the `--camera` file if one was given.
+    pub fn open_sequence(&self, seq: &Path) -> Result<Sequence> {
+        let camera = match &self.camera {
+            Some(path) => Some(
+                ecvo_io::load_camera_json(path)
+                    .with_context(|| format!("--camera {}", path.display()))?,
+            ),
+            None => None,
+        };
+        Ok(Sequence::open(seq, camera)?.every_nth(self.frame_step))
+    }
+
+    /// The tracker configuration for `camera`.
+    ///
+    /// The reference levels are `--levels` if given, else the preset's; the mode keeps
+    /// none of them (naive), the first (l1) or all of them (l2, at least two).
+    pub fn config(&self, camera: Camera) -> Result<Config> {
+        let mut config = if self.engine.paper {
+            Config::paper(camera, self.preset, Mode::L2)
+        } else {
+            Config::new(camera, self.preset, Mode::L2)
+        };
+        let e = &self.engine;
+        if let Some(name) = &e.schedule {
+            config.motion.levels = ecvo_core::parse_schedule(name, &camera)
+                .with_context(|| format!("--schedule {name}"))?;
+        }
+        if let Some(text) = &e.point_budget {
+            let budgets = ecvo_core::parse_point_budget(text)
+                .with_context(|| format!("--point-budget {text}"))?;
+            for (level, points) in budgets {
+                config.motion.set_point_budget(level, points);
+            }
+        }
+        if let Some((w, fine)) = e.weighting {
+            config.motion.weighting = w;
+            config.motion.fine_weighting = fine;
+        }
+        if let Some(d) = e.depth_noise {
+            config.motion.depth_noise = d;
+        }
+        if let Some(p) = e.prior {
+            config.motion.prior = p;
+        }
+        if let Some(d) = e.max_correction_distance {
+            config.max_correction_distance = d;
+        }
+        if let Some(d) = e.min_predicted_decrease {
+            config.motion.min_predicted_decrease = d;
+        }
+        if let Some(d) = e.min_update_px {
+            config.motion.min_update_px = d;
+        }
+        if let Some(n) = e.scale_passes {
+            config.motion.scale_passes_per_update = n;
+        }
+        if let Some(d) = e.max_fine_depth_weight {
+            config.motion.max_fine_depth_weight = d;
+        }
+        if let Some(f) = e.fuse_corrections {
+            config.fuse_corrections = f;
+        }
+        if let Some(text) = &self.levels {
+            config.reference_levels =
+                parse_levels(text).with_context(|| format!("--levels `{text}`"))?;
+        }
+        let available = config.reference_levels.len();
+        let keep = match self.mode {
+            Mode::Naive => 0,
+            Mode::L1 => 1,
+            Mode::L2 => available.max(2),
+        };
+        if keep > available {
+            bail!(
+                "--mode {} needs at least {keep} reference level(s) but --levels `{}` gives {available}",
+                mode_name(self.mode),
+                self.levels.as_deref().unwrap_or_default()
+            );
+        }
+        config.reference_levels.truncate(keep);
+        if !self.bilateral {
+            config.filter.bilateral = None;
+        }
+        if !self.normal_filter {
+            config.filter.normal_max_angle_deg = None;
+        }
+        if !self.contour_filter {
+            config.filter.contour_angle_deg = None;
+        }
+        config.validate().context("invalid tracker configuration")?;
+        Ok(config)
+    }
+}
