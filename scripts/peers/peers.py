@@ -11,6 +11,15 @@ groundtruth.txt), at several frame steps:
   other direction measured worse here: fr1/desk half 0.121 / 0.143 m instead of
   0.101 / 0.061 m for RGB-D / RGB), and the poses are composed. A failed alignment keeps the previous pose
   (counted in `failed`).
+* open3d-hybrid / open3d-color: Open3D's RGB-D odometry
+  (open3d.pipelines.odometry.compute_rgbd_odometry with the hybrid photometric and
+  geometric Jacobian of Park et al., or the photometric one of Steinbrücker et al.),
+  default OdometryOption, naively frame to frame like OpenCV's (current frame the
+  source, previous frame the target, from the identity). The RGBDImage is made with
+  depth_trunc equal to the option's depth_max (4 m), so that the image keeps the depths
+  the odometry would use. Open3D runs on one OpenMP thread (OMP_NUM_THREADS=1, set
+  before it is imported). It is imported only when asked for: run-peers.sh installs it
+  into the venv on first use (a 400 MB wheel).
 * vors: the visual-odometry-rs tracker (DSO-style direct tracking against keyframes)
   through scripts/peers/vors-cam, a driver that takes the camera from camera.json.
 
@@ -19,7 +28,9 @@ first, each image used once), as TUM's associate.py does; `--frame-steps N` keep
 Nth associated pair. Each run writes a TUM trajectory, is scored with
 `ecvo eval GT EST --json`, and is timed per frame: the median of the per-frame cost of
 the odometry (OpenCV: making the OdometryFrame from the decoded images, including the
-conversion of depth to metres, prepareFrame and compute; vors: Tracker::track), as CPU
+conversion of depth to metres, prepareFrame and compute; Open3D: making the two
+RGBDImages' Image objects and RGBDImage, and compute_rgbd_odometry, which builds both
+frames' pyramids on every call; vors: Tracker::track), as CPU
 time on one thread (OpenCV is set to one thread; vors is single-threaded), which a
 loaded machine does not inflate; the wall-clock median is in the JSON too. Reading and
 decoding the PNGs is not counted for either.
@@ -37,6 +48,10 @@ import statistics
 import subprocess
 import sys
 import time
+
+# One thread for every peer, as ecvo's ms_per_frame is measured (Open3D reads this when
+# it is imported).
+os.environ["OMP_NUM_THREADS"] = "1"
 
 import numpy as np
 import cv2
@@ -183,8 +198,49 @@ class OpenCvOdometry:
         return bool(ok), np.asarray(rt, dtype=np.float64)
 
 
-def run_opencv(mode, seq, cam, pairs, out_path):
-    odo = OpenCvOdometry(mode, cam)
+class Open3dOdometry:
+    """Open3D's RGB-D odometry with the hybrid or the photometric Jacobian."""
+
+    def __init__(self, mode, cam):
+        import open3d as o3d
+
+        self.o3d = o3d
+        odometry = o3d.pipelines.odometry
+        self.api = f"open3d {o3d.__version__} compute_rgbd_odometry ({mode})"
+        self.intrinsic = o3d.camera.PinholeCameraIntrinsic(
+            int(cam["width"]), int(cam["height"]), cam["fx"], cam["fy"], cam["cx"],
+            cam["cy"])
+        self.jacobian = {"hybrid": odometry.RGBDOdometryJacobianFromHybridTerm,
+                         "color": odometry.RGBDOdometryJacobianFromColorTerm}[mode]()
+        self.option = odometry.OdometryOption()
+        self.scale = float(cam["depth_scale"])
+        self.init = np.eye(4)
+
+    def frame(self, gray, depth_raw):
+        """An RGBDImage from decoded images (timed by the caller)."""
+        g = self.o3d.geometry
+        return g.RGBDImage.create_from_color_and_depth(
+            g.Image(gray), g.Image(depth_raw), depth_scale=self.scale,
+            depth_trunc=self.option.depth_max, convert_rgb_to_intensity=True)
+
+    def compute(self, src, dst):
+        """(ok, T) with T mapping points of src's camera frame into dst's."""
+        ok, t, _info = self.o3d.pipelines.odometry.compute_rgbd_odometry(
+            src, dst, self.intrinsic, self.init, self.jacobian, self.option)
+        return bool(ok), np.asarray(t, dtype=np.float64)
+
+
+def make_odometry(peer, cam):
+    """The Python-driven peer `peer` (opencv-* or open3d-*)."""
+    family, mode = peer.split("-", 1)
+    if family == "open3d":
+        return Open3dOdometry(mode, cam)
+    return OpenCvOdometry(mode, cam)
+
+
+def run_opencv(peer, seq, cam, pairs, out_path):
+    """Runs an OpenCV or Open3D peer naively frame to frame."""
+    odo = make_odometry(peer, cam)
     pose = np.eye(4)
     stamps, poses, ms, wall, failed = [], [], [], [], 0
     prev = None
@@ -259,7 +315,8 @@ def main():
     steps = [int(s) for s in a.frame_steps.split(",")]
     peers = a.peers.split(",")
     for p in peers:
-        if p not in ("opencv-rgbd", "opencv-rgb", "opencv-depth", "vors"):
+        if p not in ("opencv-rgbd", "opencv-rgb", "opencv-depth", "open3d-hybrid",
+                     "open3d-color", "vors"):
             ap.error(f"unknown peer {p}")
     if "vors" in peers and not a.vors_cam:
         ap.error("the vors peer needs --vors-cam")
@@ -282,7 +339,7 @@ def main():
                 if peer == "vors":
                     info = run_vors(a.vors_cam, seq, sel, est, work)
                 else:
-                    info = run_opencv(peer.split("-")[1], seq, cam, sel, est)
+                    info = run_opencv(peer, seq, cam, sel, est)
                 ate = evaluate(a.ecvo, gt, est)
                 ms = statistics.median(info["ms"]) if info["ms"] else float("nan")
                 row = {"sequence": name, "path": seq, "frame_step": step, "peer": peer,
@@ -297,6 +354,8 @@ def main():
                 print(f"| {name} | {step} | {peer} | {len(sel)} | {ate:.4f} | {ms:.2f} | "
                       f"{info['failed']} |", flush=True)
     meta = {"opencv": cv2.__version__, "numpy": np.__version__,
+            "open3d": sys.modules["open3d"].__version__ if "open3d" in sys.modules
+            else None,
             "association_max_dt_s": MAX_DT, "rows": rows}
     with open(os.path.join(a.out, "peers.json"), "w") as f:
         json.dump(meta, f, indent=2)

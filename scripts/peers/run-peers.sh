@@ -8,11 +8,13 @@
 #
 # Prints a Markdown table (sequence, frame step, peer, frames, ATE RMSE, median CPU
 # ms/frame, failed alignments) and writes DIR/peers.json (default DIR:
-# target/peers). Peers: opencv-rgbd, opencv-rgb, opencv-depth, vors.
+# target/peers). Peers: opencv-rgbd, opencv-rgb, opencv-depth, open3d-hybrid,
+# open3d-color, vors.
 #
 # First use sets up, all outside the repository's sources:
 #   - a Python venv with opencv-contrib-python and numpy in PEERS_VENV
-#     (default target/peers-venv);
+#     (default target/peers-venv), and open3d in it when an open3d-* peer is asked
+#     for (a 400 MB wheel that needs libusb-1.0: Debian's libusb-1.0-0);
 #   - scripts/peers/vors-cam (a driver of the visual-odometry-rs crate that takes
 #     camera.json's intrinsics and depth scale) built into PEERS_CACHE/vors-cam-target
 #     (default ~/.cache/ecvo-peers), about 3-4 minutes here;
@@ -32,7 +34,7 @@ while [[ $# -gt 0 ]]; do
         --frame-steps) steps=$2; shift 2 ;;
         --out) out=$2; shift 2 ;;
         --peers) peers=$2; shift 2 ;;
-        -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,21p' "$0"; exit 0 ;;
         -*) echo "unknown option $1" >&2; exit 2 ;;
         *) seqs+=("$1"); shift ;;
     esac
@@ -46,7 +48,9 @@ fi
 . "$root/scripts/peers/setup.sh"
 ensure_peers_venv "$venv"
 ensure_ecvo "$root" "$ecvo"
-
+if [[ ,$peers, == *,open3d-* ]]; then
+    ensure_open3d "$venv"
+fi
 
 args=()
 if [[ ,$peers, == *,vors,* ]]; then

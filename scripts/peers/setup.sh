@@ -16,3 +16,20 @@ ensure_ecvo() {
         (cd "$1" && cargo build --release -p ecvo-cli >&2)
     fi
 }
+
+# ensure_open3d VENV: Open3D (PyPI's `open3d`, a 400 MB wheel) in the venv, for the
+# open3d-* peers. Its Python module links libusb-1.0 (Debian: libusb-1.0-0).
+ensure_open3d() {
+    local venv=$1
+    if ! "$venv/bin/python" -c 'import open3d' 2>/dev/null; then
+        if ! "$venv/bin/python" -c 'import importlib.util, sys; sys.exit(importlib.util.find_spec("open3d") is None)'; then
+            echo "installing open3d into $venv" >&2
+            "$venv/bin/pip" install --quiet open3d >&2
+        fi
+        if ! err=$("$venv/bin/python" -c 'import open3d' 2>&1); then
+            echo "open3d does not import: ${err##*$'\n'}" >&2
+            echo "(its wheel needs libusb-1.0: apt-get install libusb-1.0-0)" >&2
+            return 1
+        fi
+    fi
+}
