@@ -224,6 +224,11 @@ struct TrackArgs {
     /// their covariances) or replace (the paper's).
     #[arg(long, value_enum)]
     corrections: Option<CorrectionsArg>,
+    /// Between corrections, register every Nth frame after the level-1 reference
+    /// against it too and fuse the result with the chain (needs --corrections fuse;
+    /// 0: off, as --paper does).
+    #[arg(long)]
+    refine_every: Option<u32>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -289,6 +294,7 @@ impl TrackArgs {
             min_update_px: self.min_update_px,
             scale_passes: self.scale_passes,
             fuse_corrections: self.corrections.map(|c| matches!(c, CorrectionsArg::Fuse)),
+            refine_every: self.refine_every,
         };
         TrackSettings {
             frame_step: self.frame_step as usize,

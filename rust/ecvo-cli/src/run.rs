@@ -303,9 +303,12 @@ fn summary_json(
             "every_nth_frame": (settings.mode == Mode::Naive).then_some(outs.cloud_every),
         },
     });
-    // Which kernel copies ran (same poses on every path): what the times measured. Set
-    // here because the `json!` above is at the macro's recursion limit.
+    // Which kernel copies ran (same poses on every path): what the times measured, and
+    // the refinements between corrections. Set here because the `json!` above is at
+    // the macro's recursion limit.
     summary["simd"] = json!(ecvo_core::simd_path());
+    summary["refinements"] = json!(c.refinements);
+    summary["refused_refinements"] = json!(c.refused_refinements);
     summary
 }
 

@@ -63,6 +63,8 @@ pub struct EngineChoice {
     pub min_update_px: Option<f64>,
     /// Scale fit passes after an accepted update.
     pub scale_passes: Option<usize>,
+    /// Register every Nth frame after the level-1 reference against it (0: off).
+    pub refine_every: Option<u32>,
 }
 
 impl EngineChoice {
@@ -94,7 +96,7 @@ impl EngineChoice {
             |s| s.name().to_string(),
         );
         format!(
-            "schedule {schedule}, {} weighting, {:?} depth noise, {:?} prior, correction gate {}, corrections {}, stop below a predicted decrease of {} or an update of {} px, {} scale pass(es) per update",
+            "schedule {schedule}, {} weighting, {:?} depth noise, {:?} prior, correction gate {}, corrections {}{}, stop below a predicted decrease of {} or an update of {} px, {} scale pass(es) per update",
             match m.fine_weighting {
                 Some(f) if f != m.weighting =>
                     format!("{:?} then {:?} at the finest step", m.weighting, f),
@@ -110,6 +112,13 @@ impl EngineChoice {
             m.prior,
             config.max_correction_distance,
             if config.fuse_corrections { "fused" } else { "replaced" },
+            match config.refine_every {
+                0 => String::new(),
+                n if config.fuse_corrections => {
+                    format!(", refined against the level-1 reference every {n} frames")
+                }
+                _ => ", refinement off (needs fused corrections)".to_string(),
+            },
             m.min_predicted_decrease,
             m.min_update_px,
             m.scale_passes_per_update
@@ -209,6 +218,9 @@ impl TrackSettings {
         }
         if let Some(f) = e.fuse_corrections {
             config.fuse_corrections = f;
+        }
+        if let Some(n) = e.refine_every {
+            config.refine_every = n;
         }
         if let Some(text) = &self.levels {
             config.reference_levels =

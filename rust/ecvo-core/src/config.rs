@@ -279,6 +279,14 @@ pub struct Config {
     /// of replacing the chain's pose with the correction's as the paper does. Off in
     /// [`Config::paper`].
     pub fuse_corrections: bool,
+    /// Every this many frames after the level-1 reference (counted from it), a frame
+    /// that calls for no correction is also registered against that reference, seeded
+    /// with its chained pose, and the result is fused with the chain as a correction
+    /// is ([`crate::correction::fuse_correction`]), without making the frame a
+    /// reference: while a reference lives long (slow motion), the chain's error is
+    /// pulled back to it between corrections. Needs `fuse_corrections`; 0 switches it
+    /// off, as [`Config::paper`] does.
+    pub refine_every: u32,
     /// A frame becomes an anchor after a loss only with at least this fraction of
     /// its pixels carrying depth after filtering.
     pub min_anchor_depth_fraction: f64,
@@ -349,6 +357,7 @@ impl Config {
             max_speed_m_s: 4.0,
             max_spread_jump: 5.0,
             fuse_corrections: true,
+            refine_every: 3,
             min_anchor_depth_fraction: 0.05,
             min_anchor_texture_fraction: 0.02,
         }
@@ -373,6 +382,7 @@ impl Config {
         c.max_speed_m_s = f64::INFINITY;
         c.max_spread_jump = f64::INFINITY;
         c.fuse_corrections = false;
+        c.refine_every = 0;
         c.motion.max_intensity_sigma = f64::INFINITY;
         c.motion.max_depth_sigma_m = f64::INFINITY;
         c

@@ -17,9 +17,11 @@
 pub mod camera;
 pub mod config;
 pub mod correction;
+pub mod counters;
 pub mod error;
 pub mod motion;
 pub mod prepare;
+pub mod prior;
 pub mod scale;
 pub mod se3;
 pub mod spread;

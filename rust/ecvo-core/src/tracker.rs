@@ -18,9 +18,11 @@ use crate::camera::{Camera, FrameView};
 use crate::config::{Config, MotionPrior, ReferenceLevel, Weighting};
 pub use crate::correction::correction_distance;
 use crate::correction::{chain_step, fuse_correction};
+pub use crate::counters::Counters;
 use crate::error::Result;
 use crate::motion::{MotionEstimator, MotionResult};
 use crate::prepare::{PreparedFrame, Preparer};
+pub use crate::prior::{Velocity, predict};
 use crate::se3;
 use crate::spread::SpreadWatch;
 
@@ -71,43 +73,6 @@ pub struct FrameOutput {
     pub refused_corrections: u8,
 }
 
-/// The counters of the paper's Table 1, and what went wrong.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct Counters {
-    /// Frames pushed.
-    pub frames: u64,
-    /// `MOTION` calls.
-    pub motion_estimations: u64,
-    /// Reference frames chosen at each level (the first frame is not counted).
-    pub references: Vec<u64>,
-    /// Frames that did not register against the previous frame.
-    pub lost_frames: u64,
-    /// Corrections (\[B\], \[C\], ...) that failed; the frame kept its uncorrected pose
-    /// and did not become a reference at that level or above.
-    pub failed_corrections: u64,
-    /// Corrections that converged implausibly far from their initial guess
-    /// ([`Config::max_correction_distance`]) and were rejected like failed ones.
-    pub rejected_corrections: u64,
-    /// References that were replaced without a correction after
-    /// [`MAX_REFUSED_CORRECTIONS`] refused corrections in a row against them (they
-    /// also count in `references`).
-    pub stale_references: u64,
-    /// Frames whose \[A\] failed but that registered against a kept reference frame.
-    pub recovered_frames: u64,
-    /// \[A\]s that started from the constant-velocity prediction rather than the
-    /// identity (the prediction explained the coarsest level better).
-    pub predicted_starts: u64,
-    /// Times the tracker started afresh after a run of lost frames.
-    pub reanchors: u64,
-    /// Registrations (\[A\] or a recovery) not believed because they implied a camera
-    /// faster than [`Config::max_speed_m_s`].
-    pub implausible_motions: u64,
-    /// Registrations (\[A\] or a recovery) not believed because their intensity and
-    /// depth residuals both spread more than [`Config::max_spread_jump`] times wider
-    /// than the recent frame-to-frame registrations' ([`crate::spread`]).
-    pub spread_jumps: u64,
-}
-
 /// Slack on the speed check, metres: registration noise on a short interval.
 const SPEED_SLACK_M: f64 = 0.02;
 
@@ -148,33 +113,6 @@ fn believable(
 /// same reference, the next frame that calls for a correction at that level becomes
 /// its reference without one: the old reference is out of reach.
 pub const MAX_REFUSED_CORRECTIONS: u32 = 3;
-
-/// The motion of the last frame registered frame to frame, for the
-/// constant-velocity prediction of the next one.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Velocity {
-    /// Index of the frame it ends at.
-    pub index: u64,
-    /// Its \[A\]: `T_{c,p}`.
-    pub motion: Pose,
-    /// Time between the two frames (seconds).
-    pub dt: f64,
-}
-
-/// The constant-velocity prediction of `T_{c,p}` for a frame `dt` seconds after its
-/// previous one, from the previous frame's \[A\] `v` over `v.dt` seconds: `v`'s twist
-/// scaled by `dt / v.dt` (at most 4, and `v` itself when the stamps cannot say).
-/// `None` when there is nothing to predict (no motion, or a non-finite one).
-pub fn predict(v: &Velocity, dt: f64) -> Option<Pose> {
-    let ratio = if v.dt > 0.0 && dt > 0.0 && (dt / v.dt).is_finite() {
-        (dt / v.dt).min(4.0)
-    } else {
-        1.0
-    };
-    let xi = se3::log(&v.motion) * ratio;
-    let p = se3::exp(&xi);
-    (se3::is_finite(&p) && xi.iter().any(|x| *x != 0.0)).then_some(p)
-}
 
 /// A frame the tracker keeps, with its pose.
 #[derive(Clone, Debug)]
@@ -380,6 +318,10 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             };
         }
 
+        if believed {
+            self.refine(&frame, index, &mut pose, &mut out);
+        }
+
         // [B], [C], ...: correct against each level's reference while the motion
         // accumulated since it is large enough. A correction that fails, or lands
         // implausibly far from its guess, changes nothing and ends the climb.
@@ -441,6 +383,54 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         out.pose = pose;
         out.reference_levels = became as u8;
         out
+    }
+
+    /// Between corrections, every [`Config::refine_every`]th frame after the level-1
+    /// reference is registered against it, seeded with its chained `pose`, and the
+    /// result fused into `pose` like a correction's, the chain's covariance becoming
+    /// the fused one's; the frame does not become a reference. Nothing happens when a
+    /// correction is due (it registers against the same reference), without a chain
+    /// to fuse with, or when the registration fails or lands implausibly far.
+    fn refine(&mut self, frame: &F, index: u64, pose: &mut Pose, out: &mut FrameOutput) {
+        let every = u64::from(self.config.refine_every);
+        let (Some(reference), Some(chain), Some(level)) = (
+            &self.refs.first().and_then(|r| r.as_ref()),
+            self.chain.first().copied().flatten(),
+            self.config.reference_levels.first(),
+        ) else {
+            return;
+        };
+        let age = index - reference.index;
+        if every == 0 || age < 2 || age % every != 0 {
+            return;
+        }
+        let accumulated = se3::compose(&reference.pose.inverse(), pose);
+        if comp(&accumulated, level) {
+            return;
+        }
+        let r = self
+            .estimator
+            .motion(frame, &reference.frame, &accumulated, &self.config.motion);
+        out.motion_estimations += 1;
+        self.counters.motion_estimations += 1;
+        self.counters.refinements += 1;
+        let fused = (r.is_ok()
+            && correction_distance(&accumulated, &r) <= self.config.max_correction_distance)
+            .then(|| {
+                let fused = fuse_correction(&accumulated, &chain, &r)?;
+                let cr = r.information.try_inverse()?;
+                // (Σ_c⁻¹ + Σ_r⁻¹)⁻¹ = Σ_c (Σ_c + Σ_r)⁻¹ Σ_r.
+                let post = chain * (cr + chain).try_inverse()? * cr;
+                Some((fused, post))
+            })
+            .flatten();
+        match fused {
+            Some((fused, post)) => {
+                self.chain[0] = Some(post);
+                *pose = se3::compose(&reference.pose, &fused);
+            }
+            None => self.counters.refused_refinements += 1,
+        }
     }
 
     /// \[A\] failed: registers the frame against the kept references (level 1 first,

@@ -88,7 +88,7 @@ fn counters_obey_the_identity_and_l2_tracks() {
         let refs: u64 = c.references.iter().sum();
         assert_eq!(
             c.motion_estimations,
-            (frames as u64 - 1) + refs,
+            (frames as u64 - 1) + refs + c.refinements,
             "{mode:?}: {c:?}"
         );
         // Per-frame outputs agree with the counters.
@@ -333,7 +333,7 @@ fn refused_corrections_do_not_promote_and_are_counted() {
     assert!(last_ref > 0);
     assert_eq!(
         c.motion_estimations,
-        (c.frames - 1) + c.rejected_corrections + c.failed_corrections,
+        (c.frames - 1) + c.rejected_corrections + c.failed_corrections + c.refinements,
         "{c:?}"
     );
     // With the default gate the same stream's corrections are accepted.

@@ -202,6 +202,8 @@ pub(crate) fn copy_counters(dst: &mut Counters, src: &Counters) {
         stale_references,
         recovered_frames,
         predicted_starts,
+        refinements,
+        refused_refinements,
         reanchors,
         implausible_motions,
         spread_jumps,
@@ -215,6 +217,8 @@ pub(crate) fn copy_counters(dst: &mut Counters, src: &Counters) {
     dst.stale_references = *stale_references;
     dst.recovered_frames = *recovered_frames;
     dst.predicted_starts = *predicted_starts;
+    dst.refinements = *refinements;
+    dst.refused_refinements = *refused_refinements;
     dst.reanchors = *reanchors;
     dst.implausible_motions = *implausible_motions;
     dst.spread_jumps = *spread_jumps;

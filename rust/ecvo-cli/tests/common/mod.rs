@@ -66,8 +66,9 @@ pub fn data_lines(path: &Path) -> Vec<String> {
 }
 
 /// Checks the counters of a summary: no loss, and every frame after the first costs
-/// one motion estimation plus one per reference it became by a correction and one per
-/// correction that failed or was rejected.
+/// one motion estimation plus one per reference it became by a correction, one per
+/// correction that failed or was rejected, and one per refinement against the
+/// level-1 reference; refused refinements are some of those.
 pub fn check_counters(s: &serde_json::Value, frames: u64, levels: usize) {
     assert_eq!(s["frames"].as_u64(), Some(frames), "{s}");
     assert_eq!(s["lost_frames"].as_u64(), Some(0), "{s}");
@@ -87,7 +88,9 @@ pub fn check_counters(s: &serde_json::Value, frames: u64, levels: usize) {
             frames - 1 + refs.iter().sum::<u64>() - count("stale_references")
                 + count("failed_corrections")
                 + count("rejected_corrections")
+                + count("refinements")
         ),
         "{s}"
     );
+    assert!(count("refused_refinements") <= count("refinements"), "{s}");
 }

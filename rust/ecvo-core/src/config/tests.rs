@@ -42,6 +42,9 @@ fn presets_carry_the_papers_values() {
             .is_empty()
     );
     assert!(pc.validate().is_ok() && phone.validate().is_ok());
+    // The paper's method registers against a reference only at a correction.
+    assert_eq!(Config::paper(cam(), Preset::Pc, Mode::L2).refine_every, 0);
+    assert!(pc.refine_every > 0);
 }
 
 #[test]
