@@ -238,7 +238,7 @@ def make_odometry(peer, cam):
     return OpenCvOdometry(mode, cam)
 
 
-def run_opencv(peer, seq, cam, pairs, out_path):
+def run_python_peer(peer, seq, cam, pairs, out_path):
     """Runs an OpenCV or Open3D peer naively frame to frame."""
     odo = make_odometry(peer, cam)
     pose = np.eye(4)
@@ -339,7 +339,7 @@ def main():
                 if peer == "vors":
                     info = run_vors(a.vors_cam, seq, sel, est, work)
                 else:
-                    info = run_opencv(peer, seq, cam, sel, est)
+                    info = run_python_peer(peer, seq, cam, sel, est)
                 ate = evaluate(a.ecvo, gt, est)
                 ms = statistics.median(info["ms"]) if info["ms"] else float("nan")
                 row = {"sequence": name, "path": seq, "frame_step": step, "peer": peer,

@@ -22,6 +22,7 @@ ensure_ecvo() {
 ensure_open3d() {
     local venv=$1
     if ! "$venv/bin/python" -c 'import open3d' 2>/dev/null; then
+        # Install only when it is missing, not when it is there but fails to load.
         if ! "$venv/bin/python" -c 'import importlib.util, sys; sys.exit(importlib.util.find_spec("open3d") is None)'; then
             echo "installing open3d into $venv" >&2
             "$venv/bin/pip" install --quiet open3d >&2
