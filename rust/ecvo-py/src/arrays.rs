@@ -72,9 +72,11 @@ pub fn row_major<'a, T: Element + Copy>(
     arr: &'a PyReadonlyArray2<'_, T>,
     scratch: &'a mut Vec<T>,
 ) -> &'a [T] {
+    // `as_slice` also takes Fortran-ordered arrays (column-major): only C order is
+    // the row-major order the engine reads.
     match arr.as_slice() {
-        Ok(s) => s,
-        Err(_) => {
+        Ok(s) if arr.is_c_contiguous() => s,
+        _ => {
             scratch.clear();
             scratch.extend(arr.as_array().iter().copied());
             scratch

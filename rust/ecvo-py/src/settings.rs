@@ -135,7 +135,7 @@ impl<'py> Kwargs<'py> {
             if let Some((k, _)) = d.iter().next() {
                 let key: String = k.str()?.to_string();
                 return Err(PyTypeError::new_err(format!(
-                    "{}() got an unexpected keyword argument {key:?} (engine settings: {})",
+                    "{}() got an unexpected keyword argument '{key}' (engine settings: {})",
                     self.func,
                     ENGINE_KEYS.join(", ")
                 )));
