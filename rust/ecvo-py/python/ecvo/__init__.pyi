@@ -1,0 +1,25 @@
+import os
+from typing import Union
+
+import numpy as np
+import numpy.typing as npt
+
+from ._ecvo import Ate
+from ._ecvo import (
+    Camera as Camera,
+    Sequence as Sequence,
+    Tracker as Tracker,
+    read_sequence as read_sequence,
+    run_sequence as run_sequence,
+)
+
+__version__: str
+__all__ = ["Camera", "Sequence", "Tracker", "ate", "read_sequence", "run_sequence"]
+
+_Trajectory = Union[str, os.PathLike, npt.ArrayLike]
+
+def ate(gt: _Trajectory, est: _Trajectory, max_dt: float = 0.02) -> Ate:
+    """Absolute trajectory error of ``est`` against ``gt`` as ``ecvo eval``, TUM's
+    ``evaluate_ate.py`` and ``evo_ape tum GT EST -a`` compute it: TUM files or
+    (N, 8) arrays of rows [t, tx, ty, tz, qx, qy, qz, qw]; poses associated by
+    timestamp within ``max_dt`` s, rigid alignment, statistics in metres."""
