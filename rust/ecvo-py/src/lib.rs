@@ -36,6 +36,7 @@ fn _ecvo(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<tracker::PyCamera>()?;
     m.add_class::<tracker::PyTracker>()?;
     m.add_class::<sequence::PySequence>()?;
+    m.add_class::<sequence::PySequenceIter>()?;
     m.add_function(wrap_pyfunction!(sequence::read_sequence, m)?)?;
     m.add_function(wrap_pyfunction!(sequence::run_sequence, m)?)?;
     m.add_function(wrap_pyfunction!(eval::ate, m)?)?;

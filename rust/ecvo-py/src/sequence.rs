@@ -92,6 +92,14 @@ impl PySequence {
             .into_pyobject(py)
     }
 
+    /// The frames in order, each decoded when it is reached.
+    fn __iter__(slf: Py<Self>) -> PySequenceIter {
+        PySequenceIter {
+            sequence: slf,
+            next: std::sync::atomic::AtomicUsize::new(0),
+        }
+    }
+
     /// The sequence's camera.
     #[getter]
     fn camera(&self) -> PyCamera {
@@ -127,6 +135,31 @@ impl PySequence {
             self.inner.camera().width,
             self.inner.camera().height
         )
+    }
+}
+
+/// An iterator over a [`PySequence`]'s frames.
+#[pyclass(module = "ecvo._ecvo", name = "SequenceIterator", frozen)]
+pub struct PySequenceIter {
+    sequence: Py<PySequence>,
+    next: std::sync::atomic::AtomicUsize,
+}
+
+#[pymethods]
+impl PySequenceIter {
+    fn __iter__(slf: Py<Self>) -> Py<Self> {
+        slf
+    }
+
+    fn __next__<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyTuple>>> {
+        use std::sync::atomic::Ordering;
+        let seq = self.sequence.get();
+        let k = self.next.fetch_add(1, Ordering::Relaxed);
+        if k >= seq.len {
+            self.next.store(seq.len, Ordering::Relaxed);
+            return Ok(None);
+        }
+        seq.__getitem__(py, k as isize).map(Some)
     }
 }
 

@@ -61,6 +61,15 @@ def test_read_sequence(synth):
     with pytest.raises(IndexError):
         seq[60]
     assert sum(1 for _ in seq) == 60
+    it = iter(ecvo.read_sequence(synth, max_frames=2))
+    assert iter(it) is it
+    first, second = next(it), next(it)
+    assert first[0] == t and np.array_equal(first[2], d)
+    assert second[0] == seq.timestamps[1]
+    with pytest.raises(StopIteration):
+        next(it)
+    with pytest.raises(StopIteration):
+        next(it)
     assert seq.groundtruth.shape == (60, 8)
     assert len(ecvo.read_sequence(synth, max_frames=7)) == 7
     stepped = ecvo.read_sequence(synth, frame_step=3)

@@ -4,7 +4,7 @@ from typing import Union
 import numpy as np
 import numpy.typing as npt
 
-from ._ecvo import Ate
+from ._ecvo import _Ate
 from ._ecvo import (
     Camera as Camera,
     Sequence as Sequence,
@@ -18,7 +18,7 @@ __all__ = ["Camera", "Sequence", "Tracker", "ate", "read_sequence", "run_sequenc
 
 _Trajectory = Union[str, os.PathLike, npt.ArrayLike]
 
-def ate(gt: _Trajectory, est: _Trajectory, max_dt: float = 0.02) -> Ate:
+def ate(gt: _Trajectory, est: _Trajectory, max_dt: float = 0.02) -> _Ate:
     """Absolute trajectory error of ``est`` against ``gt`` as ``ecvo eval``, TUM's
     ``evaluate_ate.py`` and ``evo_ape tum GT EST -a`` compute it: TUM files or
     (N, 8) arrays of rows [t, tx, ty, tz, qx, qy, qz, qw]; poses associated by

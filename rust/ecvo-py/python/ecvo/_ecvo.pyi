@@ -2,28 +2,41 @@
 
 import os
 import pathlib
-from typing import Iterator, List, Literal, Optional, Tuple, TypedDict, Union
+from typing import List, Literal, Optional, Tuple, TypedDict, Union, final
 
 import numpy as np
 import numpy.typing as npt
 
 _Path = Union[str, os.PathLike]
-State = Literal["initialising", "tracking", "lost"]
-Preset = Literal["pc", "phone"]
-Mode = Literal["naive", "l1", "l2"]
+_State = Literal["initialising", "tracking", "lost"]
+_Preset = Literal["pc", "phone"]
+_Mode = Literal["naive", "l1", "l2"]
 
+__all__ = [
+    "Camera",
+    "Tracker",
+    "Sequence",
+    "SequenceIterator",
+    "read_sequence",
+    "run_sequence",
+    "ate",
+    "_engine_push_times",
+    "simd_path",
+    "__version__",
+]
 __version__: str
 simd_path: str
 """Which kernel copies the engine runs here (the same poses on every path)."""
 
+@final
 class Camera:
     """Pinhole intrinsics and depth units of an RGB-D stream whose intensity is
     registered to its depth. ``fy`` may be negative (a flipped y axis);
     ``depth_scale`` is raw depth units per metre (5000 for TUM, 1000 for mm).
     Non-finite or unusable values are a ValueError naming the field."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         width: int,
         height: int,
         fx: float,
@@ -31,7 +44,7 @@ class Camera:
         cx: float,
         cy: float,
         depth_scale: float,
-    ) -> None: ...
+    ) -> "Camera": ...
     @staticmethod
     def from_json(path: _Path) -> "Camera":
         """Reads a ``camera.json`` (the file ecvo sequences carry)."""
@@ -51,9 +64,9 @@ class Camera:
     def depth_scale(self) -> float: ...
     def intrinsic_matrix(self) -> npt.NDArray[np.float64]:
         """The 3x3 intrinsic matrix K."""
-    def __eq__(self, other: object) -> bool: ...
+    def __eq__(self, value: object, /) -> bool: ...
 
-class Counters(TypedDict):
+class _Counters(TypedDict):
     """The tracker's counters: the paper's Table 1 and what went wrong."""
 
     frames: int
@@ -71,7 +84,7 @@ class Counters(TypedDict):
     refused_refinements: int
     spread_jumps: int
 
-class Ate(TypedDict):
+class _Ate(TypedDict):
     """Absolute trajectory error (metres) after rigid alignment of the estimate."""
 
     rmse: float
@@ -84,22 +97,23 @@ class Ate(TypedDict):
     alignment: npt.NDArray[np.float64]
     errors: npt.NDArray[np.float64]
 
-class RunResult(TypedDict):
+class _RunResult(TypedDict):
     trajectory: npt.NDArray[np.float64]
     """(N, 8) TUM rows [t, tx, ty, tz, qx, qy, qz, qw], camera to world."""
     poses: npt.NDArray[np.float64]
     """(N, 4, 4) camera-to-world poses."""
-    states: List[State]
+    states: List[_State]
     lost_frame_indices: List[int]
-    counters: Counters
+    counters: _Counters
     skipped_frames: int
     """Frames not tracked: bit-identical repeats and non-increasing timestamps."""
-    ate: Optional[Ate]
+    ate: Optional[_Ate]
     """Against the sequence's ground truth; None without one."""
     camera: Camera
     wall_time_s: float
     threads: int
 
+@final
 class Tracker:
     """Frame-to-frame RGB-D tracking with multi-level pose error correction
     (An et al., WACV 2018), frame by frame.
@@ -121,20 +135,20 @@ class Tracker:
     several threads (the GIL is released while a frame is tracked).
     """
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         camera: Camera,
-        preset: Preset = "pc",
-        mode: Mode = "l2",
+        preset: _Preset = "pc",
+        mode: _Mode = "l2",
         threads: Optional[int] = None,
         **settings: object,
-    ) -> None: ...
+    ) -> "Tracker": ...
     def push(
         self,
         timestamp: float,
         intensity: npt.NDArray[np.uint8],
         depth: npt.NDArray[np.uint16],
-    ) -> Tuple[npt.NDArray[np.float64], State]:
+    ) -> Tuple[npt.NDArray[np.float64], _State]:
         """Tracks one frame: ``intensity`` (uint8) and raw ``depth`` (uint16, 0 = no
         measurement) are (height, width) arrays; C-contiguous ones are read in place,
         others copied once. Timestamps (seconds) must increase. Returns the
@@ -149,14 +163,15 @@ class Tracker:
     def poses(self) -> npt.NDArray[np.float64]:
         """The poses so far, (N, 4, 4)."""
     def timestamps(self) -> npt.NDArray[np.float64]: ...
-    def states(self) -> List[State]: ...
-    def counters(self) -> Counters: ...
+    def states(self) -> List[_State]: ...
+    def counters(self) -> _Counters: ...
     @property
-    def state(self) -> State: ...
+    def state(self) -> _State: ...
     @property
     def camera(self) -> Camera: ...
     def __len__(self) -> int: ...
 
+@final
 class Sequence:
     """A recorded RGB-D sequence; ``seq[i]`` decodes frame ``i`` as ``(timestamp,
     intensity, depth)`` (uint8 and uint16 (height, width) arrays); iterating yields
@@ -164,11 +179,9 @@ class Sequence:
 
     def __len__(self) -> int: ...
     def __getitem__(
-        self, index: int
+        self, key: int, /
     ) -> Tuple[float, npt.NDArray[np.uint8], npt.NDArray[np.uint16]]: ...
-    def __iter__(
-        self,
-    ) -> Iterator[Tuple[float, npt.NDArray[np.uint8], npt.NDArray[np.uint16]]]: ...
+    def __iter__(self) -> "SequenceIterator": ...
     @property
     def camera(self) -> Camera: ...
     @property
@@ -178,6 +191,13 @@ class Sequence:
         """(N, 8) TUM rows, or None."""
     @property
     def path(self) -> pathlib.Path: ...
+
+@final
+class SequenceIterator:
+    def __iter__(self) -> "SequenceIterator": ...
+    def __next__(
+        self,
+    ) -> Tuple[float, npt.NDArray[np.uint8], npt.NDArray[np.uint16]]: ...
 
 def read_sequence(
     path: _Path,
@@ -192,14 +212,14 @@ def read_sequence(
 
 def run_sequence(
     path: _Path,
-    preset: Preset = "pc",
-    mode: Mode = "l2",
+    preset: _Preset = "pc",
+    mode: _Mode = "l2",
     camera: Union[Camera, _Path, None] = None,
     max_frames: Optional[int] = None,
     threads: int = 2,
     frame_step: int = 1,
     **settings: object,
-) -> RunResult:
+) -> _RunResult:
     """Tracks a recorded sequence exactly as ``ecvo run`` does (the same settings
     give bit for bit the same poses): frames decoded ahead, the filter and tracker
     stages on ``threads`` threads; bit-identical repeated frames and non-increasing
@@ -208,6 +228,17 @@ def run_sequence(
 def ate(
     gt: Union[_Path, npt.NDArray[np.float64]],
     est: Union[_Path, npt.NDArray[np.float64]],
-    max_dt: float = 0.02,
-) -> Ate:
+    max_dt: float = ...,
+) -> _Ate:
     """ATE of ``est`` against ``gt`` (TUM files or (N, 8) arrays); see ecvo.ate."""
+
+def _engine_push_times(
+    camera: Camera,
+    frames: List[Tuple[float, npt.NDArray[np.uint8], npt.NDArray[np.uint16]]],
+    preset: _Preset = "pc",
+    mode: _Mode = "l2",
+    threads: Optional[int] = None,
+    **settings: object,
+) -> List[float]:
+    """Seconds per frame of the Rust engine's own Odometry::push on these frames
+    (for scripts/python/bench_push.py)."""
