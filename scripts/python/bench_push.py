@@ -4,8 +4,14 @@
 
     python scripts/python/bench_push.py testdata/synth_phone_320x180 --rounds 7
 
-Both sides run the same build of the engine (the installed ecvo package) with the
-same settings and thread pool; rounds alternate between them. The sequence is played
+Two comparisons, both with the same build of the engine (the installed package),
+settings and thread pool:
+- paired: each Tracker.push is timed from Python (perf_counter around the call)
+  and, inside it, Odometry::push is timed in Rust (Tracker._last_engine_s): the same
+  frame at the same moment, so the ratio is the binding's overhead whatever else the
+  machine is doing;
+- separate: the Rust engine alone over the same frames (_ecvo._engine_push_times),
+  in rounds alternating with the Python ones (sensitive to the machine's load). The sequence is played
 forward, backward and forward again (--laps) with increasing timestamps, a
 continuous path. Prints median, mean and p95 per frame (ms) for each side and the
 ratio Python / Rust of each figure.
@@ -45,19 +51,23 @@ def main():
     frames = [(k / 30.0, i, d) for k, (i, d) in enumerate(path)]
     settings = dict(preset=args.preset, threads=args.threads)
 
-    py_times, rust_times = [], []
+    py_times, inner_times, rust_times = [], [], []
     for r in range(args.rounds + 1):
         tracker = ecvo.Tracker(seq.camera, **settings)
-        times = []
+        times, inner = [], []
         for t, i, d in frames:
             t0 = time.perf_counter()
             tracker.push(t, i, d)
             times.append(time.perf_counter() - t0)
+            inner.append(tracker._last_engine_s)
         engine = _ecvo._engine_push_times(seq.camera, frames, **settings)
         if r > 0:  # round 0 warms both up
             py_times += times
+            inner_times += inner
             rust_times += engine
-    py, rust = stats(py_times), stats(rust_times)
+    py, inner, rust = stats(py_times), stats(inner_times), stats(rust_times)
+    paired = {k: py[k] / inner[k] for k in py}
+    overhead_us = {k: 1e3 * v for k, v in stats(np.subtract(py_times, inner_times)).items()}
     ratio = {k: py[k] / rust[k] for k in py}
     result = {
         "sequence": str(args.sequence),
@@ -66,6 +76,9 @@ def main():
         "threads": args.threads,
         "simd": _ecvo.simd_path,
         "python_ms": py,
+        "engine_inside_push_ms": inner,
+        "paired_ratio": paired,
+        "binding_overhead_us": overhead_us,
         "rust_ms": rust,
         "ratio": ratio,
     }
@@ -73,9 +86,16 @@ def main():
         print(json.dumps(result, indent=2))
     else:
         print(f"{args.sequence}: {len(frames)} frames x {args.rounds} rounds, threads {args.threads}")
-        for name, s in (("Tracker.push (Python)", py), ("Odometry::push (Rust)", rust)):
-            print(f"  {name:22s} median {s['median']:.3f}  mean {s['mean']:.3f}  p95 {s['p95']:.3f} ms")
-        print(f"  ratio Python/Rust      median {ratio['median']:.3f}  mean {ratio['mean']:.3f}  p95 {ratio['p95']:.3f}")
+        rows = (
+            ("Tracker.push (Python)", py, "ms"),
+            ("  its Odometry::push", inner, "ms"),
+            ("  paired ratio", paired, ""),
+            ("  binding overhead", overhead_us, "us"),
+            ("Odometry::push alone", rust, "ms"),
+            ("  ratio Python/alone", ratio, ""),
+        )
+        for name, s, unit in rows:
+            print(f"  {name:22s} median {s['median']:.3f}  mean {s['mean']:.3f}  p95 {s['p95']:.3f} {unit}")
 
 
 if __name__ == "__main__":

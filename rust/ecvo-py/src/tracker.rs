@@ -180,6 +180,7 @@ pub struct PyTracker {
     states: Vec<TrackingState>,
     scratch_intensity: Vec<u8>,
     scratch_depth: Vec<u16>,
+    last_engine_s: f64,
 }
 
 #[pymethods]
@@ -208,6 +209,7 @@ impl PyTracker {
             states: Vec::new(),
             scratch_intensity: Vec::new(),
             scratch_depth: Vec::new(),
+            last_engine_s: f64::NAN,
         })
     }
 
@@ -243,9 +245,15 @@ impl PyTracker {
         };
         let odo = &mut this.odo;
         let pool = this.pool.as_ref();
-        let out = py
-            .detach(|| in_pool(pool, || odo.push(view)))
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let (out, engine_s) = py.detach(|| {
+            in_pool(pool, || {
+                let t0 = Instant::now();
+                let out = odo.push(view);
+                (out, t0.elapsed().as_secs_f64())
+            })
+        });
+        let out = out.map_err(|e| PyValueError::new_err(e.to_string()))?;
+        this.last_engine_s = engine_s;
         this.trajectory.push(out.timestamp, out.pose);
         this.states.push(out.state);
         let pose = pose_array(py, &out.pose);
@@ -304,6 +312,14 @@ impl PyTracker {
 
     fn __len__(&self) -> usize {
         self.trajectory.len()
+    }
+
+    /// Seconds the engine itself (`Odometry::push`, timed in Rust) took over the last
+    /// push: what `Tracker.push` costs beyond it is the binding's
+    /// (`scripts/python/bench_push.py`).
+    #[getter]
+    fn _last_engine_s(&self) -> f64 {
+        self.last_engine_s
     }
 }
 

@@ -170,6 +170,9 @@ class Tracker:
     @property
     def camera(self) -> Camera: ...
     def __len__(self) -> int: ...
+    @property
+    def _last_engine_s(self) -> float:
+        """Seconds Odometry::push (timed in Rust) took over the last push."""
 
 @final
 class Sequence:
