@@ -1,3 +1,4 @@
+// Also rewrites calls of the Java 9+ covariant java.nio buffer methods (see covariantBuffer).
 // Rewrites every invokedynamic that bootstraps through java.lang.invoke.LambdaMetafactory
 // into a plain class, so that Android's dx (which does not desugar) writes no invoke-custom.
 // Used by scripts/android/build-apk.sh on the shrunk app + kotlin-stdlib jar; see
@@ -40,6 +41,7 @@ import org.objectweb.asm.tree.ClassNode;
 import org.objectweb.asm.tree.InvokeDynamicInsnNode;
 import org.objectweb.asm.tree.MethodInsnNode;
 import org.objectweb.asm.tree.MethodNode;
+import org.objectweb.asm.tree.TypeInsnNode;
 
 public final class LambdaDesugar {
     private static final String LMF = "java/lang/invoke/LambdaMetafactory";
@@ -65,11 +67,22 @@ public final class LambdaDesugar {
         List<ClassNode> generated = new ArrayList<>();
         Set<String> touched = new HashSet<>();
         java.util.Set<String> modified = new java.util.HashSet<>();
-        int sites = 0;
+        int sites = 0, buffers = 0;
         for (ClassNode cn : classes.values()) {
             int n = 0;
             for (MethodNode m : cn.methods) {
                 for (AbstractInsnNode insn = m.instructions.getFirst(); insn != null; insn = insn.getNext()) {
+                    if (insn instanceof MethodInsnNode && covariantBuffer((MethodInsnNode) insn)) {
+                        MethodInsnNode mi = (MethodInsnNode) insn;
+                        String ret = Type.getReturnType(mi.desc).getInternalName();
+                        mi.desc = mi.desc.substring(0, mi.desc.indexOf(')') + 1) + "Ljava/nio/Buffer;";
+                        TypeInsnNode cast = new TypeInsnNode(Opcodes.CHECKCAST, ret);
+                        m.instructions.insert(mi, cast);
+                        insn = cast;
+                        modified.add(cn.name);
+                        buffers++;
+                        continue;
+                    }
                     if (!(insn instanceof InvokeDynamicInsnNode)) continue;
                     InvokeDynamicInsnNode indy = (InvokeDynamicInsnNode) insn;
                     String where = cn.name + "." + m.name + m.desc;
@@ -114,6 +127,7 @@ public final class LambdaDesugar {
                 out.closeEntry();
             }
         }
+        System.err.println("[desugar] " + buffers + " covariant java.nio buffer calls rewritten to Buffer's");
         System.err.println("[desugar] " + sites + " LambdaMetafactory call sites rewritten into "
                 + generated.size() + " classes");
     }
@@ -259,6 +273,26 @@ public final class LambdaDesugar {
             fail(where + ": private implementation " + impl.getOwner() + "." + impl.getName() + " outside the jar");
         }
         return cn;
+    }
+
+    private static final Set<String> BUFFER_METHODS = new HashSet<>(java.util.Arrays.asList(
+            "position", "limit", "mark", "reset", "clear", "flip", "rewind"));
+
+    /**
+     * A call of a java.nio buffer's covariant override (Java 9+: ByteBuffer.position(int) returns
+     * ByteBuffer). Android declares them only in java.nio.Buffer (returning Buffer) at every API
+     * level, so such a reference fails with NoSuchMethodError; code compiled against
+     * android.jar calls the Buffer-returning method, which the rewrite restores (+ checkcast).
+     */
+    private static boolean covariantBuffer(MethodInsnNode mi) {
+        if (mi.getOpcode() != Opcodes.INVOKEVIRTUAL || !mi.owner.startsWith("java/nio/")
+                || !mi.owner.endsWith("Buffer") || mi.owner.equals("java/nio/Buffer")
+                || !BUFFER_METHODS.contains(mi.name)) {
+            return false;
+        }
+        Type ret = Type.getReturnType(mi.desc);
+        return ret.getSort() == Type.OBJECT && ret.getInternalName().startsWith("java/nio/")
+                && ret.getInternalName().endsWith("Buffer") && !ret.getInternalName().equals("java/nio/Buffer");
     }
 
     /** Converts the value on the stack from `from` (known to be `as` when a reference) to `to`. */
