@@ -442,7 +442,7 @@ class Generator:
                 seen.add(m.name)
                 typ = ov if ov and not ov.startswith("!") else self.field_type(m, c)
                 if m.static:
-                    init = default_value(typ) if m.literal is None else literal_java(m.literal, typ)
+                    init = runtime_value(typ) if m.literal is None else literal_java(m.literal, typ)
                     out.append(f"{pad}public static final {typ} {m.name} = {init};")
                 elif not c.interface:
                     out.append(f"{pad}public {typ} {m.name};")
@@ -597,6 +597,22 @@ def default_value(t):
         return "0f"
     if t == "double":
         return "0.0"
+    return "null"
+
+
+BOXES = {"boolean": "Boolean", "int": "Integer", "short": "Short", "byte": "Byte", "char": "Character",
+         "long": "Long", "float": "Float", "double": "Double"}
+
+
+def runtime_value(t):
+    """The initialiser of a static final field the declarations give no value for (such as
+    Build.VERSION.SDK_INT): not a compile-time constant, so that Kotlin and javac read the
+    field at run time instead of inlining the stub's value (which would fold away every
+    `if (Build.VERSION.SDK_INT >= N)` branch)."""
+    if t in BOXES:
+        return f"{BOXES[t]}.valueOf(({t}) {default_value(t)})"
+    if t in ("java.lang.String", "String"):
+        return "String.valueOf((Object) null)"
     return "null"
 
 

@@ -28,7 +28,7 @@ NoClassDefFoundError / NoSuchMethodError, and class-loading checks (Class.forNam
 Superclasses and interfaces of every dex class must exist at minSdk (no guard applies).
 
 Usage: api_levels.py DEX_OR_DEXDUMP --dts MERGED.d.ts --android-jar android-23.jar
-           [--min-sdk 26] [--allow FILE] [--json OUT]
+           [--min-sdk 26] [--allow FILE] [--list-guarded]
 Exit status 1 when there is a finding; the findings go to stdout, one a line.
 """
 import argparse
@@ -406,7 +406,9 @@ def api_impl_level(internal):
 
 
 # --- the check --------------------------------------------------------------------------------
-def check(dexdump_text, platform, min_sdk, allow=()):
+def check(dexdump_text, platform, min_sdk, allow=(), guarded=None):
+    """Findings (sorted lines) and the number of methods; references above min_sdk that a
+    guard (or an Api<N>Impl class) covers are appended to `guarded` when it is a list."""
     classes, methods = parse_dexdump(dexdump_text)
     findings = []
     cache = {}
@@ -499,9 +501,11 @@ def check(dexdump_text, platform, min_sdk, allow=()):
                 target_impl = api_impl_level(cls)
                 if target_impl and api_impl_level(m.cls) != target_impl and lvl is not None:
                     lvl = max(lvl, target_impl)
+                ref = f"{cls}" + (f".{name}:{desc}" if name else "")
                 if lvl is None or lvl > have:
-                    ref = f"{cls}" + (f".{name}:{desc}" if name else "")
                     report(f"{m.cls}.{m.name} @{addr:04x}", ref, lvl, why, have)
+                elif lvl > min_sdk and guarded is not None:
+                    guarded.append(f"{m.cls}.{m.name} @{addr:04x}: {ref} (API {lvl}) guarded at {have}")
     return sorted(set(findings)), len(methods)
 
 
@@ -512,6 +516,8 @@ def main(argv=None):
     ap.add_argument("--android-jar", required=True)
     ap.add_argument("--min-sdk", type=int, default=26)
     ap.add_argument("--allow", help="file of substrings; a finding containing one is not reported")
+    ap.add_argument("--list-guarded", action="store_true",
+                    help="also list (stderr) the references above minSdk that a guard covers")
     a = ap.parse_args(argv)
     if a.dex.endswith((".dex", ".apk")):
         text = subprocess.run(["dexdump", "-d", a.dex], check=True, capture_output=True, text=True).stdout
@@ -523,7 +529,10 @@ def main(argv=None):
         with open(a.allow) as f:
             allow = [ln.split("#")[0].strip() for ln in f if ln.split("#")[0].strip()]
     platform = Platform(a.dts, a.android_jar)
-    findings, n = check(text, platform, a.min_sdk, allow)
+    guarded = [] if a.list_guarded else None
+    findings, n = check(text, platform, a.min_sdk, allow, guarded)
+    for g in sorted(set(guarded or [])):
+        print("guarded: " + g, file=sys.stderr)
     for f in findings:
         print(f)
     print(f"api-levels: {n} methods checked at minSdk {a.min_sdk}: {len(findings)} finding(s)", file=sys.stderr)
