@@ -32,7 +32,6 @@ Usage: api_levels.py DEX_OR_DEXDUMP --dts MERGED.d.ts --android-jar android-23.j
 Exit status 1 when there is a finding; the findings go to stdout, one a line.
 """
 import argparse
-import json
 import os
 import re
 import struct
@@ -322,8 +321,7 @@ def guard_bounds(m, floor):
     """Lower bound on SDK_INT before each instruction (by index), from the method's branches."""
     n = len(m.insns)
     index = {a: i for i, (a, _, _) in enumerate(m.insns)}
-    TOP = None
-    state = [TOP] * n  # (bound, frozenset of (reg, value)) or None = unreached
+    state = [None] * n  # (bound, frozenset of (reg, value)) or None = unreached
     state[0] = (floor, frozenset()) if n else None
 
     def meet(a, b):
@@ -425,8 +423,8 @@ def check(dexdump_text, platform, min_sdk, allow=(), guarded=None):
                 res = (0, "")
                 break
             if name + ":" + desc in classes[c]["members"]:
-                lvl = api_impl_level(c) if name != "<init>" or True else None
-                res = (lvl or 0, "")
+                # a member of the dex itself: available, except inside an Api<N>Impl class
+                res = (api_impl_level(c) or 0, "")
                 break
             # an inherited member: look in the interfaces defined in the dex, then the superclass
             c = classes[c]["super"]
