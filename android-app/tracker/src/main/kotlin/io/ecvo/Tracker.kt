@@ -219,6 +219,18 @@ class Tracker(val config: TrackerConfig) : PoseTracker {
         private val REAPER = NativeReaper("ecvo-tracker-reaper")
 
         /**
+         * Whether [e] is the native side refusing a frame for its timestamp (not after the
+         * previous accepted frame's, the `TimestampNotIncreasing` error of `ecvo-pipeline`):
+         * that frame is not tracked but later frames are, so a caller may skip it and go on.
+         * Any other exception is not this.
+         */
+        fun isRefusedTimestamp(e: Throwable): Boolean =
+            e is IllegalArgumentException && e.message?.contains(REFUSED_TIMESTAMP) == true
+
+        /** The words of the native message for a refused timestamp (`ecvo-pipeline`'s `TimestampNotIncreasing`). */
+        const val REFUSED_TIMESTAMP: String = "is not after the previous frame's"
+
+        /**
          * Loads `libecvo_jni` if it is not loaded yet; null when it is usable, else a
          * sentence saying why not (missing for this ABI, or failed to initialise). Never
          * throws: the UI shows the message instead of crashing.

@@ -185,6 +185,7 @@ class SessionController(
             presenter.onTrackerUpdate(t.state, stats, ts, now)
             presenter.onRates(rate.fps, extraDroppedNoColour)
             presenter.onRecording(s.recording)
+            presenter.onSkippedTimestamps(s.refusedTimestamps)
             // Poses older than the tracker's window are gone (a UI that did not poll for
             // that long); draw on from the window's start.
             if (trajectory.nextIndex < stats.trajectoryStart) trajectory.skipTo(stats.trajectoryStart)

@@ -19,7 +19,10 @@ data class StatusText(
     val timing: String,
     /** "refs L1 12 · L2 3". */
     val references: String,
-    /** "120 frames · 3 dropped · 1 lost" (and "· 5 without colour" for live depth frames dropped unpaired). */
+    /**
+     * "120 frames · 3 dropped · 1 lost" (and "· 5 without colour" for live depth frames
+     * dropped unpaired, "· 2 bad timestamps skipped" for frames the tracker refused).
+     */
     val frames: String,
     /** "28.4 fps · filter 4.1 · tracker 7.9 · latency 15.2 ms", or "" before the first tracked frame. */
     val stages: String,
@@ -53,6 +56,7 @@ class TrackingPresenter(
     private var stalled = false
     private var fps = 0.0
     private var droppedNoColour = 0L
+    private var skippedTimestamps = 0L
     private val notices = LinkedHashSet<String>()
 
     /** The result of looking for a camera with DEPTH_OUTPUT. */
@@ -68,6 +72,7 @@ class TrackingPresenter(
         notices.clear()
         fps = 0.0
         droppedNoColour = 0
+        skippedTimestamps = 0
         state = TrackingState.INITIALISING
         stats = TrackerStats.EMPTY
         lastPoseNs = Long.MIN_VALUE
@@ -99,6 +104,9 @@ class TrackingPresenter(
         this.fps = fps
         this.droppedNoColour = droppedNoColour
     }
+
+    /** Frames skipped because the tracker refused their timestamp (the session went on). */
+    fun onSkippedTimestamps(count: Long) { skippedTimestamps = count }
 
     /** Recording switched on or off. */
     fun onRecording(on: Boolean) { recording = on }
@@ -133,6 +141,7 @@ class TrackingPresenter(
                 append(stats.framesTracked).append(" frames")
                 if (stats.framesDropped > 0) append(" · ").append(stats.framesDropped).append(" dropped")
                 if (droppedNoColour > 0) append(" · ").append(droppedNoColour).append(" without colour")
+                if (skippedTimestamps > 0) append(" · ").append(skippedTimestamps).append(" bad timestamps skipped")
                 if (stats.lostFrames > 0) append(" · ").append(stats.lostFrames).append(" lost")
             }
             val stages = if (stats.framesTracked == 0L) "" else String.format(

@@ -2,6 +2,7 @@ package io.ecvo.shared
 
 import io.ecvo.PoseTracker
 import io.ecvo.PushStatus
+import io.ecvo.Tracker
 
 /**
  * One run of the tracker: owns the [PoseTracker] and the optional [StreamRecorder].
@@ -24,18 +25,31 @@ class TrackingSession(
     /** Whether a recorder is running. */
     val recording: Boolean get() = synchronized(recorderLock) { recorder != null }
 
+    private val refused = java.util.concurrent.atomic.AtomicLong()
+
+    /** Frames the tracker refused for their timestamp ([Tracker.isRefusedTimestamp]), skipped. */
+    val refusedTimestamps: Long get() = refused.get()
+
     /**
-     * Records the frame (if recording) and pushes it to the tracker. Returns null when the
-     * tracker is already closed (a reset while a frame was in flight); other tracker
-     * errors are thrown.
+     * Pushes the frame to the tracker and records it (if recording). Returns null when
+     * the tracker is already closed (a reset while a frame was in flight) or refused the
+     * frame's timestamp (not after the previous frame's: a camera glitch, a clock jump);
+     * such a frame is skipped, counted in [refusedTimestamps] and not recorded, and the
+     * session goes on. Other tracker errors are thrown.
      */
     fun push(timestampNs: Long, depthMm: ShortArray, intensity: ByteArray): PushStatus? {
-        record(timestampNs, depthMm, intensity)
-        return try {
+        val status = try {
             tracker.pushFrame(timestampNs, depthMm, intensity)
         } catch (e: IllegalStateException) {
-            if (tracker.isClosed) null else throw e
+            if (tracker.isClosed) return null else throw e
+        } catch (e: IllegalArgumentException) {
+            if (!Tracker.isRefusedTimestamp(e)) throw e
+            refused.incrementAndGet()
+            return null
         }
+        // The tracker copied the frame; recording it afterwards keeps refused frames out.
+        record(timestampNs, depthMm, intensity)
+        return status
     }
 
     private fun record(timestampNs: Long, depthMm: ShortArray, intensity: ByteArray) {
