@@ -255,7 +255,12 @@ class MainActivity : Activity() {
             if (controller.startRecording { cam -> StreamRecorder(dir, cam) }) SessionHolder.lastRecording = dir
         } else {
             val r = controller.stopRecording()
-            if (r != null) Toast.makeText(this, getString(R.string.recorded_to, r.framesWritten, r.dir.path), Toast.LENGTH_LONG).show()
+            if (r != null) {
+                val dropped = controller.recordingDropped
+                val text = getString(R.string.recorded_to, r.framesWritten, r.dir.path) +
+                    (if (dropped > 0) getString(R.string.recorded_dropped, dropped) else "")
+                Toast.makeText(this, text, Toast.LENGTH_LONG).show()
+            }
         }
         render()
     }

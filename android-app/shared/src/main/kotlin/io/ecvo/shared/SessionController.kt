@@ -184,7 +184,7 @@ class SessionController(
             rate.sample(now, stats.framesTracked)
             presenter.onTrackerUpdate(t.state, stats, ts, now)
             presenter.onRates(rate.fps, extraDroppedNoColour)
-            presenter.onRecording(s.recording)
+            presenter.onRecording(s.recording, s.recordingDropped)
             presenter.onSkippedTimestamps(s.refusedTimestamps)
             // Poses older than the tracker's window are gone (a UI that did not poll for
             // that long); draw on from the window's start.
@@ -209,7 +209,7 @@ class SessionController(
         }
         return try {
             s.startRecording(make(cam))
-            presenter.onRecording(true)
+            presenter.onRecording(true, 0)
             true
         } catch (e: Exception) {
             presenter.onNotice(describe("Recording could not start", e))
@@ -217,7 +217,10 @@ class SessionController(
         }
     }
 
-    /** Stops recording; the finished recorder, or null. */
+    /** Frames the current session's running or last recording had no room for (its queue was full). */
+    val recordingDropped: Long get() = session?.recordingDropped ?: 0L
+
+    /** Stops recording (waits for the queued frames to be written); the finished recorder, or null. */
     fun stopRecording(): StreamRecorder? {
         val r = try {
             session?.stopRecording()

@@ -21,7 +21,8 @@ data class StatusText(
     val references: String,
     /**
      * "120 frames · 3 dropped · 1 lost" (and "· 5 without colour" for live depth frames
-     * dropped unpaired, "· 2 bad timestamps skipped" for frames the tracker refused).
+     * dropped unpaired, "· 4 not recorded" for frames the recorder could not keep up
+     * with, "· 2 bad timestamps skipped" for frames the tracker refused).
      */
     val frames: String,
     /** "28.4 fps · filter 4.1 · tracker 7.9 · latency 15.2 ms", or "" before the first tracked frame. */
@@ -57,6 +58,7 @@ class TrackingPresenter(
     private var fps = 0.0
     private var droppedNoColour = 0L
     private var skippedTimestamps = 0L
+    private var recordingDropped = 0L
     private val notices = LinkedHashSet<String>()
 
     /** The result of looking for a camera with DEPTH_OUTPUT. */
@@ -108,8 +110,11 @@ class TrackingPresenter(
     /** Frames skipped because the tracker refused their timestamp (the session went on). */
     fun onSkippedTimestamps(count: Long) { skippedTimestamps = count }
 
-    /** Recording switched on or off. */
-    fun onRecording(on: Boolean) { recording = on }
+    /** Recording switched on or off; [dropped] frames the recorder's queue had no room for. */
+    fun onRecording(on: Boolean, dropped: Long = recordingDropped) {
+        recording = on
+        recordingDropped = dropped
+    }
 
     /**
      * A poll of the tracker at wall-clock [nowNs] (monotonic): its [state], [stats] and
@@ -141,6 +146,7 @@ class TrackingPresenter(
                 append(stats.framesTracked).append(" frames")
                 if (stats.framesDropped > 0) append(" · ").append(stats.framesDropped).append(" dropped")
                 if (droppedNoColour > 0) append(" · ").append(droppedNoColour).append(" without colour")
+                if (recordingDropped > 0) append(" · ").append(recordingDropped).append(" not recorded")
                 if (skippedTimestamps > 0) append(" · ").append(skippedTimestamps).append(" bad timestamps skipped")
                 if (stats.lostFrames > 0) append(" · ").append(stats.lostFrames).append(" lost")
             }

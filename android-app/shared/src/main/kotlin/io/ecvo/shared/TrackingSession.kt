@@ -3,29 +3,36 @@ package io.ecvo.shared
 import io.ecvo.PoseTracker
 import io.ecvo.PushStatus
 import io.ecvo.Tracker
+import java.util.concurrent.atomic.AtomicLong
 
 /**
- * One run of the tracker: owns the [PoseTracker] and the optional [StreamRecorder].
- * Frames come in on a source's thread ([push]); the UI thread reads the tracker and
- * switches recording on and off.
+ * One run of the tracker: owns the [PoseTracker] and the optional recorder. Frames come
+ * in on a source's thread ([push]); the UI thread reads the tracker and switches
+ * recording on and off.
  *
- * Every frame the source delivered is recorded, whatever became of it in the tracker
- * (a [PushStatus.DROPPED] frame was queued too: the one dropped was an older one), so
- * that replaying a recording offline sees every frame the camera gave. A recorder that
- * fails (disk full) is closed, what it wrote stays a readable stream, and
- * [onRecordingFailed] is told; tracking goes on.
+ * Every frame the tracker took is recorded, whatever became of it there (a
+ * [PushStatus.DROPPED] frame was queued too: the one dropped was an older one), so that
+ * replaying a recording offline sees every frame the camera gave. Recording runs on its
+ * own thread with a bounded queue ([AsyncRecorder]): a frame that finds the queue full
+ * is not recorded and counted ([recordingDropped]). A recorder that fails (disk full) is
+ * closed, what it wrote stays a readable stream, and [onRecordingFailed] is told (on the
+ * recorder's thread); tracking goes on.
  */
 class TrackingSession(
     val tracker: PoseTracker,
+    private val recorderCapacity: Int = AsyncRecorder.DEFAULT_CAPACITY,
     private val onRecordingFailed: (String) -> Unit = {},
 ) : AutoCloseable {
     private val recorderLock = Any()
-    private var recorder: StreamRecorder? = null
+    private var recorder: AsyncRecorder<StreamRecorder>? = null
+    private var lastDropped = 0L
+    private val refused = AtomicLong()
 
     /** Whether a recorder is running. */
     val recording: Boolean get() = synchronized(recorderLock) { recorder != null }
 
-    private val refused = java.util.concurrent.atomic.AtomicLong()
+    /** Frames the running (or last) recording could not keep up with. */
+    val recordingDropped: Long get() = synchronized(recorderLock) { recorder?.framesDropped ?: lastDropped }
 
     /** Frames the tracker refused for their timestamp ([Tracker.isRefusedTimestamp]), skipped. */
     val refusedTimestamps: Long get() = refused.get()
@@ -48,38 +55,38 @@ class TrackingSession(
             return null
         }
         // The tracker copied the frame; recording it afterwards keeps refused frames out.
-        record(timestampNs, depthMm, intensity)
+        synchronized(recorderLock) { recorder?.offer(timestampNs, depthMm, intensity) }
         return status
     }
 
-    private fun record(timestampNs: Long, depthMm: ShortArray, intensity: ByteArray) {
-        val failed: String? = synchronized(recorderLock) {
-            val r = recorder ?: return
-            try {
-                r.writeFrame(timestampNs, depthMm, intensity)
-                null
-            } catch (e: Exception) {
-                // IOException (disk full, storage removed) or a frame the recorder refuses.
-                recorder = null
-                runCatching { r.close() }
-                "Recording stopped: ${e.message ?: e.javaClass.simpleName}. The ${r.framesWritten} frames before it are kept in ${r.dir.path}."
-            }
+    private fun onFailed(r: AsyncRecorder<StreamRecorder>, message: String) {
+        synchronized(recorderLock) {
+            if (recorder !== r) return
+            recorder = null
+            lastDropped = r.framesDropped
         }
-        if (failed != null) onRecordingFailed(failed)
+        onRecordingFailed(message)
     }
 
-    /** Starts recording into [recorder] (replacing and closing any previous one). */
-    fun startRecording(recorder: StreamRecorder) = synchronized(recorderLock) {
-        this.recorder?.let { runCatching { it.close() } }
-        this.recorder = recorder
+    /** Starts recording into [recorder] (replacing and finishing any previous one). */
+    fun startRecording(recorder: StreamRecorder) {
+        stopRecording()
+        val r = AsyncRecorder(recorder, recorderCapacity, ::onFailed)
+        synchronized(recorderLock) { this.recorder = r }
     }
 
-    /** Stops recording; returns the finished recorder (closed), or null if none was running. */
-    fun stopRecording(): StreamRecorder? = synchronized(recorderLock) {
-        val r = recorder
-        recorder = null
-        r?.close()
-        r
+    /**
+     * Stops recording: waits for the queued frames to be written, and returns the
+     * finished recorder (closed), or null if none was running.
+     */
+    fun stopRecording(): StreamRecorder? {
+        val r = synchronized(recorderLock) {
+            val r = recorder ?: return null
+            recorder = null
+            lastDropped = r.framesDropped
+            r
+        }
+        return r.finish()
     }
 
     override fun close() {

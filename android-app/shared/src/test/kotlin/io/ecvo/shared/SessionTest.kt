@@ -80,16 +80,23 @@ class SessionTest {
     @Test
     fun aRecorderThatFailsStopsRecordingWithAMessageAndTrackingGoesOn() {
         val fake = FakeTracker()
-        val messages = ArrayList<String>()
+        val messages = java.util.Collections.synchronizedList(ArrayList<String>())
         val dir = File(TestSupport.tempDir(), "rec")
         val s = TrackingSession(fake) { messages += it }
         s.startRecording(StreamRecorder(dir, cam))
         s.push(1_000_000L, depth, gray)
+        // Written on the recorder's thread: wait for it.
+        val written = System.nanoTime() + 5_000_000_000L
+        while (File(dir, "rgb.txt").readLines().none { !it.startsWith("#") } && System.nanoTime() < written) Thread.sleep(5)
         // The disk "fills": the depth folder becomes a file, so the next PNG cannot be written.
         File(dir, "depth").deleteRecursively()
         File(dir, "depth").writeText("not a folder")
         assertEquals(PushStatus.ACCEPTED, s.push(2_000_000L, depth, gray))
         assertEquals(PushStatus.ACCEPTED, s.push(3_000_000L, depth, gray))
+        // The recorder runs on its own thread: the failure arrives there.
+        val deadline = System.nanoTime() + 5_000_000_000L
+        while (s.recording && System.nanoTime() < deadline) Thread.sleep(5)
+        Thread.sleep(30)
         assertFalse(s.recording)
         assertEquals(1, messages.size)
         assertTrue(messages[0], messages[0].startsWith("Recording stopped") && messages[0].contains("1 frames"))
