@@ -35,9 +35,10 @@ import io.ecvo.shared.TimestampSource
  * Live frames from a Camera2 depth camera (`ImageFormat.DEPTH16`) with intensity from a
  * colour camera facing the same way (the Y plane of `YUV_420_888`). Every decision is
  * made by :shared ([Setup.find] only copies `CameraCharacteristics` into it): the stream
- * sizes, the 16:9 crop and the intrinsics, lens distortion, the depth-to-colour pose,
+ * sizes and the intrinsics, lens distortion, the depth-to-colour pose,
  * pairing by clock, and the confidence policy. Frames reach [callbacks] on [handler]'s
- * thread as 320x180 millimetres and 8-bit gray; every failure (including a throwing
+ * thread at the depth stream's native size (a 240x180 ToF stream stays 240x180 with its
+ * own intrinsics) as millimetres and 8-bit gray; every failure (including a throwing
  * Camera2 call) reaches `callbacks.failed`, never the thread's uncaught handler.
  */
 class DepthCameraSource(
@@ -55,7 +56,7 @@ class DepthCameraSource(
         val depthSize: StreamSize,
         val colourId: String,
         val colourSize: StreamSize,
-        /** Depth stream to tracker frame: crop, scale, undistort; its camera is the tracker's. */
+        /** Depth stream to tracker frame (same size; undistorts if needed); its camera is the tracker's. */
         val remap: DepthRemap,
         val registration: IntensityRegistration,
         val pairing: Pairing,
@@ -211,7 +212,7 @@ class DepthCameraSource(
          * Call at the start of a session, after the CAMERA permission was granted: without
          * it, Camera2 hides `LENS_INTRINSIC_CALIBRATION` and `LENS_POSE_*`.
          */
-        fun find(manager: CameraManager, frameWidth: Int = 320, frameHeight: Int = 180): Setup? {
+        fun find(manager: CameraManager): Setup? {
             val ids = manager.cameraIdList
             for (depthId in ids) {
                 val dc = manager.getCameraCharacteristics(depthId)
@@ -219,7 +220,8 @@ class DepthCameraSource(
                 if (CameraMetadata.REQUEST_AVAILABLE_CAPABILITIES_DEPTH_OUTPUT !in caps) continue
                 val sizes = dc.get(CameraCharacteristics.SCALER_STREAM_CONFIGURATION_MAP)?.getOutputSizes(ImageFormat.DEPTH16)
                     ?.map { StreamSize(it.width, it.height) } ?: continue
-                val depthSize = StreamSizes.depth(sizes, frameWidth, frameHeight) ?: continue
+                // Tracked at the stream's native size (240x180 stays 240x180): no crop, no upsampling.
+                val depthSize = StreamSizes.nativeDepth(sizes) ?: continue
                 val facing = dc.get(CameraCharacteristics.LENS_FACING)
                 // Colour cameras facing the same way; the largest sensor is the "primary" one.
                 val colours = ids.filter { id ->
@@ -237,7 +239,7 @@ class DepthCameraSource(
                 val cc = manager.getCameraCharacteristics(colourId)
                 val yuv = cc.get(CameraCharacteristics.SCALER_STREAM_CONFIGURATION_MAP)?.getOutputSizes(ImageFormat.YUV_420_888)
                     ?.map { StreamSize(it.width, it.height) } ?: continue
-                val colourSize = StreamSizes.colour(yuv, depthSize, frameWidth) ?: continue
+                val colourSize = StreamSizes.colour(yuv, depthSize, depthSize.width) ?: continue
 
                 val notes = ArrayList<String>()
                 val depthCal = calibration(dc)
@@ -245,7 +247,7 @@ class DepthCameraSource(
                 if (!depthCal.calibrated) notes += "The depth camera publishes no intrinsic calibration; its focal length is estimated from the lens and sensor size."
                 val depthCam = depthCal.sensorIntrinsics().forOutput(depthSize.width, depthSize.height)
                 val colourCam = colourCal.sensorIntrinsics().forOutput(colourSize.width, colourSize.height)
-                val remap = DepthRemap.create(depthCam, frameWidth, frameHeight, depthCal.effectiveDistortion)
+                val remap = DepthRemap.create(depthCam, depthSize.width, depthSize.height, depthCal.effectiveDistortion)
                 val decision = PosePolicy.decide(pose(dc), pose(cc), colourIsPrimary = colourId == primary)
                 decision.note?.let { notes += it }
                 val pairing = Pairing.choose(clock(dc), clock(cc))
