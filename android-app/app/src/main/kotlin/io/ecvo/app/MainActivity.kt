@@ -393,7 +393,7 @@ class MainActivity : Activity() {
 
     private fun render() {
         val st = controller.presenter.status
-        stateText.text = st.state
+        stateText.text = if (st.mode.isEmpty()) st.state else "${st.state} · ${st.mode}" // e.g. "Tracking · depth only"
         stateText.setTextColor(
             when (st.kind) {
                 StatusKind.TRACKING -> 0xFF34A853.toInt()

@@ -27,6 +27,9 @@ class SourceCallbacks internal constructor(private val controller: SessionContro
     /** Something the user should know that does not stop the source (any thread). */
     fun notice(message: String) = controller.onSourceNotice(token, message)
 
+    /** The live source's mode, shown on screen (any thread). */
+    fun mode(mode: LiveMode) = controller.onSourceMode(token, mode)
+
     /** The source ended normally (end of a replay; any thread). */
     fun finished() = controller.onSourceFinished(token)
 
@@ -131,6 +134,10 @@ class SessionController(
 
     internal fun onSourceNotice(t: Long, message: String) = post {
         if (isCurrent(t)) presenter.onNotice(message)
+    }
+
+    internal fun onSourceMode(t: Long, mode: LiveMode) = post {
+        if (isCurrent(t)) presenter.onLiveMode(mode)
     }
 
     internal fun onSourceFinished(t: Long) = post {

@@ -33,6 +33,8 @@ data class StatusText(
     val canStartLive: Boolean,
     /** Whether frames are being recorded. */
     val recording: Boolean,
+    /** What a live session streams ("depth + colour", "depth only"); "" otherwise. */
+    val mode: String = "",
 )
 
 /**
@@ -59,6 +61,7 @@ class TrackingPresenter(
     private var droppedNoColour = 0L
     private var skippedTimestamps = 0L
     private var recordingDropped = 0L
+    private var liveMode: LiveMode? = null
     private val notices = LinkedHashSet<String>()
 
     /** The result of looking for a camera with DEPTH_OUTPUT. */
@@ -75,6 +78,7 @@ class TrackingPresenter(
         fps = 0.0
         droppedNoColour = 0
         skippedTimestamps = 0
+        liveMode = null
         state = TrackingState.INITIALISING
         stats = TrackerStats.EMPTY
         lastPoseNs = Long.MIN_VALUE
@@ -106,6 +110,9 @@ class TrackingPresenter(
         this.fps = fps
         this.droppedNoColour = droppedNoColour
     }
+
+    /** The live source's mode (it may fall back to depth alone during the session). */
+    fun onLiveMode(mode: LiveMode) { liveMode = mode }
 
     /** Frames skipped because the tracker refused their timestamp (the session went on). */
     fun onSkippedTimestamps(count: Long) { skippedTimestamps = count }
@@ -162,7 +169,8 @@ class TrackingPresenter(
                 notices.isNotEmpty() -> notices.joinToString("\n")
                 else -> null
             }
-            return StatusText(label, kind, timing, refs, frames, stages, message, depthCamera == true && !permissionDenied, recording)
+            val mode = if (source == FrameSource.LIVE) liveMode?.label ?: "" else ""
+            return StatusText(label, kind, timing, refs, frames, stages, message, depthCamera == true && !permissionDenied, recording, mode)
         }
 
     companion object {
