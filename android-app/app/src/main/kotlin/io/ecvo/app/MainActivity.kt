@@ -27,9 +27,13 @@ import io.ecvo.shared.AppSettings
 import io.ecvo.shared.CameraIntrinsics
 import io.ecvo.shared.ConfidencePolicy
 import io.ecvo.shared.DirectoryFiles
+import io.ecvo.shared.ExportFiles
+import io.ecvo.shared.ExportPlan
+import io.ecvo.shared.ExportSelection
 import io.ecvo.shared.FrameSource
 import io.ecvo.shared.PreviewKind
 import io.ecvo.shared.ProjectionPlane
+import io.ecvo.shared.RecordingEntry
 import io.ecvo.shared.Recordings
 import io.ecvo.shared.SessionController
 import io.ecvo.shared.SessionExport
@@ -186,7 +190,8 @@ class MainActivity : Activity() {
         pointCloud = settings.pointCloud,
     )
 
-    private fun startReplay(files: StreamFiles) {
+    /** Replays [files]; [recording] is the recordings folder it comes from (null: the bundled sample). */
+    private fun startReplay(files: StreamFiles, recording: File? = null) {
         val reader = try {
             StreamReader(files)
         } catch (e: Exception) {
@@ -199,9 +204,10 @@ class MainActivity : Activity() {
         SessionHolder.resumeLive = false
         trajectoryView.clear()
         SessionHolder.previewSize = reader.camera.width to reader.camera.height
-        controller.start(FrameSource.REPLAY, trackerConfig(reader.camera, FrameSource.REPLAY)) { cb ->
+        val started = controller.start(FrameSource.REPLAY, trackerConfig(reader.camera, FrameSource.REPLAY)) { cb ->
             ReplaySource(reader, cb) { d, g -> if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g) }.start()
         }
+        if (started) SessionHolder.streams.onStarted(recording)
         render()
     }
 
@@ -228,6 +234,7 @@ class MainActivity : Activity() {
         liveSetup = setup
         trajectoryView.clear()
         if (controller.start(FrameSource.LIVE, trackerConfig(setup.frame, FrameSource.LIVE)) { cb -> openCamera(setup, cb) }) {
+            SessionHolder.streams.onStarted(null)
             setup.notes.forEach { controller.presenter.onNotice(it) }
         }
         render()
@@ -252,7 +259,7 @@ class MainActivity : Activity() {
         if (on) {
             val name = SimpleDateFormat("yyyyMMdd-HHmmss", Locale.ROOT).format(Date())
             val dir = File(recordingsDir, name)
-            if (controller.startRecording { cam -> StreamRecorder(dir, cam) }) SessionHolder.lastRecording = dir
+            if (controller.startRecording { cam -> StreamRecorder(dir, cam) }) SessionHolder.streams.onRecording(dir)
         } else {
             val r = controller.stopRecording()
             if (r != null) {
@@ -265,8 +272,20 @@ class MainActivity : Activity() {
         render()
     }
 
+    /** Lists the recordings on a worker thread (it reads every folder), then shows them. */
     private fun showRecordings() {
-        val list = Recordings.list(recordingsDir)
+        val root = recordingsDir
+        Thread(Runnable {
+            val list = try {
+                Recordings.list(root)
+            } catch (e: Exception) {
+                emptyList()
+            }
+            ui.post { if (!isFinishing && !isDestroyed) showRecordingList(list) }
+        }, "ecvo-recordings").start()
+    }
+
+    private fun showRecordingList(list: List<RecordingEntry>) {
         if (list.isEmpty()) {
             Toast.makeText(this, R.string.no_recordings, Toast.LENGTH_LONG).show()
             return
@@ -274,34 +293,75 @@ class MainActivity : Activity() {
         val labels = list.map { String.format(Locale.ROOT, "%s · %d frames · %.1f MB", it.name, it.frames, it.bytes / 1e6) }.toTypedArray<CharSequence>()
         AlertDialog.Builder(this)
             .setTitle(R.string.recordings_title)
-            .setItems(labels) { _, which -> startReplay(DirectoryFiles(list[which].dir)) }
+            .setItems(labels) { _, which -> showRecordingActions(list[which]) }
             .setNegativeButton(R.string.close, null)
             .show()
     }
 
+    /** Replay, export or delete one recording. */
+    private fun showRecordingActions(r: RecordingEntry) {
+        val actions = arrayOf<CharSequence>(getString(R.string.recording_replay), getString(R.string.recording_export), getString(R.string.recording_delete))
+        AlertDialog.Builder(this)
+            .setTitle(r.name)
+            .setItems(actions) { _, which ->
+                when (which) {
+                    0 -> startReplay(DirectoryFiles(r.dir), r.dir)
+                    1 -> export(ExportSelection.forRecording(r.dir, controller.session != null, SessionHolder.streams.stream), r.name)
+                    else -> confirmDelete(r)
+                }
+            }
+            .setNegativeButton(R.string.close, null)
+            .show()
+    }
+
+    private fun confirmDelete(r: RecordingEntry) {
+        AlertDialog.Builder(this)
+            .setTitle(R.string.recording_delete)
+            .setMessage(getString(R.string.recording_delete_confirm, r.name, r.frames))
+            .setPositiveButton(R.string.recording_delete) { _, _ ->
+                // Not the folder being recorded into, nor the one a running replay reads.
+                val inUse = if (controller.presenter.status.recording || controller.running == FrameSource.REPLAY) SessionHolder.streams.stream else null
+                val root = recordingsDir
+                Thread(Runnable {
+                    val ok = Recordings.delete(root, r.dir, inUse)
+                    ui.post {
+                        if (ok) SessionHolder.streams.onDeleted(r.dir)
+                        Toast.makeText(this, if (ok) getString(R.string.recording_deleted, r.name) else getString(R.string.recording_not_deleted, r.name), Toast.LENGTH_LONG).show()
+                    }
+                }, "ecvo-delete").start()
+            }
+            .setNegativeButton(R.string.close, null)
+            .show()
+    }
+
+    /** The Share button: the session with the stream it replays or recorded. */
     private fun export() {
-        val session = controller.session
-        if (session == null) {
+        val plan = ExportSelection.forSession(controller.session != null, SessionHolder.streams.stream)
+        if (plan == null) {
             Toast.makeText(this, R.string.nothing_to_export, Toast.LENGTH_LONG).show()
             return
         }
+        export(plan, null)
+    }
+
+    /** Writes [plan] into a new zip on a worker thread (never deleting an earlier one), then shares it. */
+    private fun export(plan: ExportPlan, recordingName: String?) {
         Toast.makeText(this, R.string.exporting, Toast.LENGTH_SHORT).show()
-        val name = "ecvo-" + SimpleDateFormat("yyyyMMdd-HHmmss", Locale.ROOT).format(Date())
+        val stamp = SimpleDateFormat("yyyyMMdd-HHmmss", Locale.ROOT).format(Date())
+        val base = if (recordingName != null) "ecvo-recording-$recordingName" else "ecvo-$stamp"
         val exports = ExportProvider.exportsDir(cacheDir)
-        val recording = SessionHolder.lastRecording
+        val session = if (plan.withSession) controller.session else null
         val withCloud = settings.pointCloud
-        Thread({
+        Thread(Runnable {
             try {
-                exports.deleteRecursively()
-                val dir = File(exports, name)
-                val t = session.tracker
-                // The tracker keeps the latest Tracker.TRAJECTORY_WINDOW poses: export those.
-                val poses = t.trajectorySince(t.stats().trajectoryStart.toInt())
-                SessionExport.write(dir, poses, t.references(), if (withCloud) t.pointCloud(MAX_EXPORT_POINTS) else null)
-                if (recording != null && recording.isDirectory) recording.copyRecursively(File(dir, "stream"))
-                val zip = File(exports, "$name.zip")
-                SessionExport.zip(dir, zip)
-                dir.deleteRecursively()
+                val zip = ExportFiles.pack(plan, exports, base) { dir ->
+                    val t = session?.tracker
+                    if (t != null) {
+                        // The tracker keeps the latest Tracker.TRAJECTORY_WINDOW poses: export those.
+                        val poses = t.trajectorySince(t.stats().trajectoryStart.toInt())
+                        SessionExport.write(dir, poses, t.references(), if (withCloud) t.pointCloud(MAX_EXPORT_POINTS) else null)
+                    }
+                }
                 ui.post { share(zip) }
             } catch (e: Exception) {
                 ui.post { controller.presenter.onNotice("Export failed: ${e.message ?: e.javaClass.simpleName}"); render() }
