@@ -8,11 +8,13 @@ import android.content.Intent
 import android.content.pm.PackageManager
 import android.graphics.Bitmap
 import android.hardware.camera2.CameraManager
+import android.os.Build
 import android.os.Bundle
 import android.os.Handler
 import android.os.Looper
 import android.util.Log
 import android.view.View
+import android.view.WindowInsets
 import android.view.WindowManager
 import android.widget.Button
 import android.widget.ImageView
@@ -20,6 +22,8 @@ import android.widget.RadioGroup
 import android.widget.TextView
 import android.widget.Toast
 import android.widget.ToggleButton
+import android.window.OnBackInvokedCallback
+import android.window.OnBackInvokedDispatcher
 import io.ecvo.ReferenceFrame
 import io.ecvo.Tracker
 import io.ecvo.TrackerConfig
@@ -86,6 +90,23 @@ class MainActivity : Activity() {
     override fun onCreate(savedInstanceState: Bundle?) {
         super.onCreate(savedInstanceState)
         setContentView(R.layout.activity_main)
+        // targetSdk 35: Android 15 draws the window edge to edge, under the status and
+        // navigation bars; the root pads itself by their insets (and the cutout's).
+        val root = findViewById<View>(R.id.root)
+        val pad = root.paddingLeft
+        root.setOnApplyWindowInsetsListener { v, insets -> applyInsets(v, insets, pad) }
+        root.requestApplyInsets()
+        // Back ends the session. On Android 12+ the default Back of a root activity only
+        // moves the task behind (the session would go on); on 13+ with predictive back
+        // the system calls this callback instead of onBackPressed.
+        if (Build.VERSION.SDK_INT >= 33) {
+            onBackInvokedDispatcher.registerOnBackInvokedCallback(
+                OnBackInvokedDispatcher.PRIORITY_DEFAULT,
+                object : OnBackInvokedCallback {
+                    override fun onBackInvoked() = finish()
+                },
+            )
+        }
         stateText = findViewById(R.id.status_state)
         numbersText = findViewById(R.id.status_numbers)
         messageText = findViewById(R.id.status_message)
@@ -122,6 +143,8 @@ class MainActivity : Activity() {
         // Not granted yet is not a denial: the user is asked when they press Live.
         if (hasDepthCamera && hasCameraPermission()) controller.presenter.onCameraPermission(true)
         render()
+        // A rotation closed the dialog that was open: show it again.
+        savedInstanceState?.getString(STATE_DIALOG)?.let { reopenDialog(it) }
     }
 
     override fun onResume() {
@@ -144,13 +167,76 @@ class MainActivity : Activity() {
         super.onPause()
     }
 
+    @Deprecated("Called up to Android 12L, and on 13+ without predictive back")
+    @Suppress("DEPRECATION")
+    override fun onBackPressed() {
+        finish() // not super: on 12+ that only moves a root activity's task to the back
+    }
+
+    /** Pads [v] by the system bars' and cutout's insets plus its own [pad]. */
+    private fun applyInsets(v: View, insets: WindowInsets, pad: Int): WindowInsets {
+        if (Build.VERSION.SDK_INT >= 30) {
+            val i = insets.getInsets(WindowInsets.Type.systemBars() or WindowInsets.Type.displayCutout())
+            v.setPadding(pad + i.left, pad + i.top, pad + i.right, pad + i.bottom)
+        } else {
+            @Suppress("DEPRECATION")
+            v.setPadding(
+                pad + insets.systemWindowInsetLeft, pad + insets.systemWindowInsetTop,
+                pad + insets.systemWindowInsetRight, pad + insets.systemWindowInsetBottom,
+            )
+        }
+        return insets
+    }
+
     override fun onDestroy() {
         // Leaving the app (back) ends the session; a rotation keeps it.
         if (isFinishing && !isChangingConfigurations) {
             SessionHolder.resumeLive = false
             controller.reset()
         }
+        // A dialog left open would leak its window; onSaveInstanceState noted it for the next activity.
+        dialog?.let { d -> dialog = null; d.dismiss() }
         super.onDestroy()
+    }
+
+    /** The dialog on screen and what it shows, to reopen it after a rotation. */
+    private var dialog: AlertDialog? = null
+    private var dialogKind: String? = null
+
+    private fun keep(kind: String, d: AlertDialog) {
+        dialog = d
+        dialogKind = kind
+        d.setOnDismissListener { if (dialog === d) { dialog = null; dialogKind = null } }
+    }
+
+    override fun onSaveInstanceState(outState: Bundle) {
+        super.onSaveInstanceState(outState)
+        dialogKind?.let { outState.putString(STATE_DIALOG, it) }
+    }
+
+    /** Reopens the dialog a rotation closed ([kind] as [keep] named it). */
+    private fun reopenDialog(kind: String) {
+        when {
+            kind == "settings" -> showSettings()
+            kind == "recordings" -> showRecordings()
+            kind == "permission" -> onLiveClicked()
+            kind.startsWith("recording:") || kind.startsWith("delete:") -> {
+                val name = kind.substringAfter(':')
+                val root = recordingsDir
+                Thread(Runnable {
+                    val r = try {
+                        Recordings.list(root).firstOrNull { it.name == name }
+                    } catch (e: Exception) {
+                        null
+                    }
+                    ui.post {
+                        if (r != null && !isFinishing && !isDestroyed) {
+                            if (kind.startsWith("delete:")) confirmDelete(r) else showRecordingActions(r)
+                        }
+                    }
+                }, "ecvo-recordings").start()
+            }
+        }
     }
 
     private fun hasCameraPermission() = checkSelfPermission(Manifest.permission.CAMERA) == PackageManager.PERMISSION_GRANTED
@@ -160,12 +246,12 @@ class MainActivity : Activity() {
         when {
             hasCameraPermission() -> startLive()
             shouldShowRequestPermissionRationale(Manifest.permission.CAMERA) ->
-                AlertDialog.Builder(this)
+                keep("permission", AlertDialog.Builder(this)
                     .setTitle(R.string.permission_title)
                     .setMessage(R.string.permission_rationale)
                     .setPositiveButton(R.string.permission_continue) { _, _ -> requestPermissions(arrayOf(Manifest.permission.CAMERA), REQUEST_CAMERA) }
                     .setNegativeButton(R.string.permission_not_now) { _, _ -> controller.presenter.onCameraPermission(false); render() }
-                    .show()
+                    .show())
             else -> requestPermissions(arrayOf(Manifest.permission.CAMERA), REQUEST_CAMERA)
         }
     }
@@ -201,6 +287,7 @@ class MainActivity : Activity() {
             return
         }
         SessionHolder.camera = null
+        GravitySensor.clear(this) // no gravity in a recording: the first camera's x-z top view
         SessionHolder.resumeLive = false
         trajectoryView.clear()
         SessionHolder.previewSize = reader.camera.width to reader.camera.height
@@ -232,6 +319,7 @@ class MainActivity : Activity() {
             return
         }
         liveSetup = setup
+        GravitySensor.measure(this, setup.sensorOrientation, setup.backFacing)
         trajectoryView.clear()
         if (controller.start(FrameSource.LIVE, trackerConfig(setup.frame, FrameSource.LIVE)) { cb -> openCamera(setup, cb) }) {
             SessionHolder.streams.onStarted(null)
@@ -291,17 +379,17 @@ class MainActivity : Activity() {
             return
         }
         val labels = list.map { String.format(Locale.ROOT, "%s · %d frames · %.1f MB", it.name, it.frames, it.bytes / 1e6) }.toTypedArray<CharSequence>()
-        AlertDialog.Builder(this)
+        keep("recordings", AlertDialog.Builder(this)
             .setTitle(R.string.recordings_title)
             .setItems(labels) { _, which -> showRecordingActions(list[which]) }
             .setNegativeButton(R.string.close, null)
-            .show()
+            .show())
     }
 
     /** Replay, export or delete one recording. */
     private fun showRecordingActions(r: RecordingEntry) {
         val actions = arrayOf<CharSequence>(getString(R.string.recording_replay), getString(R.string.recording_export), getString(R.string.recording_delete))
-        AlertDialog.Builder(this)
+        keep("recording:" + r.name, AlertDialog.Builder(this)
             .setTitle(r.name)
             .setItems(actions) { _, which ->
                 when (which) {
@@ -311,11 +399,11 @@ class MainActivity : Activity() {
                 }
             }
             .setNegativeButton(R.string.close, null)
-            .show()
+            .show())
     }
 
     private fun confirmDelete(r: RecordingEntry) {
-        AlertDialog.Builder(this)
+        keep("delete:" + r.name, AlertDialog.Builder(this)
             .setTitle(R.string.recording_delete)
             .setMessage(getString(R.string.recording_delete_confirm, r.name, r.frames))
             .setPositiveButton(R.string.recording_delete) { _, _ ->
@@ -331,7 +419,7 @@ class MainActivity : Activity() {
                 }, "ecvo-delete").start()
             }
             .setNegativeButton(R.string.close, null)
-            .show()
+            .show())
     }
 
     /** The Share button: the session with the stream it replays or recorded. */
@@ -405,7 +493,7 @@ class MainActivity : Activity() {
             "${getString(R.string.settings_preview)}: ${s.preview.name.lowercase()}",
             "${getString(R.string.settings_cloud)}: ${if (s.pointCloud) "on" else "off"}",
         )
-        AlertDialog.Builder(this)
+        keep("settings", AlertDialog.Builder(this)
             .setTitle(R.string.settings)
             .setItems(rows) { _, which ->
                 saveSettings(
@@ -421,7 +509,7 @@ class MainActivity : Activity() {
                 showSettings()
             }
             .setNegativeButton(R.string.close, null)
-            .show()
+            .show())
     }
 
     private fun <T> next(v: T, all: List<T>): T = all[(all.indexOf(v) + 1) % all.size]
@@ -482,6 +570,7 @@ class MainActivity : Activity() {
         private const val PREVIEW_EVERY = 4L
         private const val REQUEST_CAMERA = 1
         private const val PREFS = "ecvo-settings"
+        private const val STATE_DIALOG = "dialog"
         private const val MAX_EXPORT_POINTS = 500_000
     }
 }
