@@ -25,7 +25,10 @@ class counts as a reference of level N (so it must be guarded itself).
 Not detected as guards: a check in a caller (guard the call site of a helper, or put the helper
 in an Api<N>Impl class), SDK_INT read through a field or a helper method, try/catch of
 NoClassDefFoundError / NoSuchMethodError, and class-loading checks (Class.forName).
-Superclasses and interfaces of every dex class must exist at minSdk (no guard applies).
+A dex class whose superclass or interfaces need API L (e.g. an object implementing
+OnBackInvokedCallback, 33) is treated the same way: its own code is checked at L, and every
+reference to it (new-instance, calls, fields, const-class) must be guarded at L; ART loads such
+a class lazily, at its first use. A supertype not in the Android API at all is an error.
 
 Usage: api_levels.py DEX_OR_DEXDUMP --dts MERGED.d.ts --android-jar android-23.jar
            [--min-sdk 26] [--allow FILE] [--list-guarded]
@@ -470,15 +473,29 @@ def check(dexdump_text, platform, min_sdk, allow=(), guarded=None):
         if not any(a and a in line for a in allow):
             findings.append(line)
 
+    # A dex class whose supertypes need API L loads only from L on: its code is checked at L and
+    # every reference to it counts as level L (like an Api<N>Impl class, with N inferred).
+    need = {}
+
+    def class_need(c, seen=()):
+        if c not in classes or c in seen:
+            return 0
+        if c not in need:
+            lv = api_impl_level(c) or 0
+            for s in [classes[c]["super"]] + classes[c]["ifaces"]:
+                if not s:
+                    continue
+                sl = class_need(s, seen + (c,)) if s in classes else (platform.class_level(s) or 0)
+                lv = max(lv, sl)
+            need[c] = lv
+        return need[c]
+
     for c, info in classes.items():
-        floor = max(min_sdk, api_impl_level(c) or 0)
         for s in [info["super"]] + info["ifaces"]:
-            if s and s not in classes:
-                lv = platform.class_level(s)
-                if lv is None or lv > floor:
-                    report(f"{c} (class header)", s, lv, "class not in the Android API", floor)
+            if s and s not in classes and platform.class_level(s) is None:
+                report(f"{c} (class header)", s, None, "class not in the Android API", min_sdk)
     for m in methods:
-        floor = max(min_sdk, api_impl_level(m.cls) or 0)
+        floor = max(min_sdk, class_need(m.cls))
         bounds = guard_bounds(m, floor)
         for i, (addr, op, args) in enumerate(m.insns):
             have = bounds[i]
@@ -495,10 +512,10 @@ def check(dexdump_text, platform, min_sdk, allow=(), guarded=None):
                     refs.append((t.group(1).lstrip("["), None, None))
             for cls, name, desc in refs:
                 lvl, why = resolve(cls[1:-1] if cls.startswith("L") else cls, name, desc)
-                # a call into another class's Api<N>Impl counts as level N
-                target_impl = api_impl_level(cls)
-                if target_impl and api_impl_level(m.cls) != target_impl and lvl is not None:
-                    lvl = max(lvl, target_impl)
+                # a reference to a dex class that loads only from API N on counts as level N
+                target = cls[1:-1] if cls.startswith("L") else cls
+                if lvl is not None and class_need(target) > min_sdk:
+                    lvl = max(lvl, class_need(target))
                 ref = f"{cls}" + (f".{name}:{desc}" if name else "")
                 if lvl is None or lvl > have:
                     report(f"{m.cls}.{m.name} @{addr:04x}", ref, lvl, why, have)

@@ -72,7 +72,7 @@ else
 fi
 rc=0; check cases || rc=$?
 [ $rc = 1 ] || bad "the cases probe should have findings (exit $rc)"
-fns="$(grep -oE '^fun (ok|bad)[A-Za-z]+' "$P/cases/Cases.kt" | cut -d' ' -f2)"
+fns="$(grep -oE '^fun (ok|bad)[A-Za-z0-9]+' "$P/cases/Cases.kt" | cut -d' ' -f2)"
 [ "$(echo "$fns" | wc -l)" -ge 10 ] || die "too few cases found in Cases.kt"
 for fn in $fns; do
   if grep -q "^probe/cases/CasesKt\.$fn @" "$W/cases.findings"; then flagged=1; else flagged=0; fi

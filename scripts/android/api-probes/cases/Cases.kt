@@ -44,3 +44,12 @@ fun badNotInAndroid(): Any = java.lang.invoke.LambdaMetafactory::class.java
 
 /** Java 9's covariant ByteBuffer.position(int): ByteBuffer, which Android does not declare. */
 fun badCovariantByteBuffer(): Any = java.nio.ByteBuffer.allocate(4).position(1)
+
+/** A class implementing an API 33 interface loads only from 33 on: create it under a guard. */
+fun okGuardedApi33Class(): Any? = if (Build.VERSION.SDK_INT >= 33) object : Cleaner.Cleanable {
+    override fun clean() {}
+} else null
+
+fun badUnguardedApi33Class(): Any = object : Cleaner.Cleanable {
+    override fun clean() {}
+}
