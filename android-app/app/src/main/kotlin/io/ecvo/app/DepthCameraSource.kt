@@ -378,7 +378,11 @@ class DepthCameraSource(
                 ?.map { StreamSize(it.width, it.height) } ?: return null
             val colourSize = StreamSizes.colour(yuv, depthSize, depthSize.width) ?: return null
             val colourCam = calibration(cc).sensorIntrinsics().forOutput(colourSize.width, colourSize.height)
-            val decision = PosePolicy.decide(pose(dc), pose(cc), colourIsPrimary = colourId == primary)
+            val decision = PosePolicy.decide(
+                pose(dc), pose(cc), colourIsPrimary = colourId == primary,
+                depthOrientation = dc.get(CameraCharacteristics.SENSOR_ORIENTATION) ?: 0,
+                colourOrientation = cc.get(CameraCharacteristics.SENSOR_ORIENTATION) ?: 0,
+            )
             decision.note?.let { notes += it }
             val pairing = Pairing.choose(clock(dc), clock(cc))
             if (pairing == Pairing.ARRIVAL_TIME) notes += "The cameras' timestamps are not on a common clock; depth and colour are paired by arrival time."
