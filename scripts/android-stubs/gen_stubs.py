@@ -46,6 +46,7 @@ class Member:
     literal: str = None  # constant value text for literal-typed static fields
     line: int = 0
     tparams: list = None  # a generic method's own type parameters
+    since: int = None  # API level of a `/** @since N */` comment before it (None: no comment)
 
 
 @dataclass
@@ -61,6 +62,7 @@ class Cls:
     members: list = field(default_factory=list)
     outer: str = None  # fqn of the enclosing class, if nested
     line: int = 0
+    since: int = None  # as Member.since
 
 
 def split_top(s, sep=","):
@@ -94,6 +96,8 @@ def parse(path):
         lines = f.read().split("\n")
     i = 0
     pending_interface = False
+    pending_since = None
+    since_re = re.compile(r"@since (\d+)")
     while i < len(lines):
         raw = lines[i]
         s = raw.strip()
@@ -103,6 +107,9 @@ def parse(path):
         if s.startswith("/**") or s.startswith("*") or s.startswith("*/"):
             if "interface with the provided implementation" in s:
                 pending_interface = True
+            ms = since_re.search(s)
+            if ms:
+                pending_since = int(ms.group(1))
             continue
         if s.startswith("declare module ") or s.startswith("export module "):
             name = s.split()[2]
@@ -121,7 +128,9 @@ def parse(path):
             tparams = [t.strip() for t in split_top(m.group(3)[1:-1])] if m.group(3) else []
             ext = (m.group(4) or "").strip() or None
             impl = split_top(m.group(5)) if m.group(5) else []
-            c = Cls(fqn, m.group(2), tparams, ext, impl, bool(m.group(1)), outer=outer, line=i)
+            c = Cls(fqn, m.group(2), tparams, ext, impl, bool(m.group(1)), outer=outer, line=i,
+                    since=pending_since)
+            pending_since = None
             classes[fqn] = c
             stack.append(("class", c))
             continue
@@ -147,7 +156,9 @@ def parse(path):
                 pending_interface = False
             mem = parse_member(stmt, i)
             if mem:
+                mem.since = pending_since
                 c.members.append(mem)
+            pending_since = None
             continue
         # Something else opening a block (should not happen): track braces.
         if s.endswith("{"):
@@ -409,7 +420,8 @@ class Generator:
         return base in JDK_INTERFACES
 
     def override(self, c, m):
-        for key in (f"{c.fqn}#{m.name}({len(m.params)})", f"{c.fqn}#{m.name}"):
+        keys = (f"{c.fqn}#{m.name}({','.join(m.params)})", f"{c.fqn}#{m.name}({len(m.params)})", f"{c.fqn}#{m.name}")
+        for key in keys:
             if key in self.overrides:
                 return self.overrides[key]
         return None
@@ -430,7 +442,7 @@ class Generator:
                 seen.add(m.name)
                 typ = ov if ov and not ov.startswith("!") else self.field_type(m, c)
                 if m.static:
-                    init = default_value(typ) if m.literal is None else literal_java(m.literal, typ)
+                    init = runtime_value(typ) if m.literal is None else literal_java(m.literal, typ)
                     out.append(f"{pad}public static final {typ} {m.name} = {init};")
                 elif not c.interface:
                     out.append(f"{pad}public {typ} {m.name};")
@@ -585,6 +597,22 @@ def default_value(t):
         return "0f"
     if t == "double":
         return "0.0"
+    return "null"
+
+
+BOXES = {"boolean": "Boolean", "int": "Integer", "short": "Short", "byte": "Byte", "char": "Character",
+         "long": "Long", "float": "Float", "double": "Double"}
+
+
+def runtime_value(t):
+    """The initialiser of a static final field the declarations give no value for (such as
+    Build.VERSION.SDK_INT): not a compile-time constant, so that Kotlin and javac read the
+    field at run time instead of inlining the stub's value (which would fold away every
+    `if (Build.VERSION.SDK_INT >= N)` branch)."""
+    if t in BOXES:
+        return f"{BOXES[t]}.valueOf(({t}) {default_value(t)})"
+    if t in ("java.lang.String", "String"):
+        return "String.valueOf((Object) null)"
     return "null"
 
 

@@ -22,6 +22,8 @@ declare module android {
 			public static RATIO: 0.5;
 			public static NAME: "widget";
 			public static DEFAULT: android.demo.Widget;
+			/** @since 30 */
+			public static LEVEL: number;
 			public size: number;
 			public constructor(name: string);
 			public getTimestamp(): number;
@@ -129,6 +131,9 @@ class GenStubsTest(unittest.TestCase):
         self.assertEqual(c["android.demo.Widget.Key"].tparams, ["T"])
         self.assertEqual(c["android.demo.Widget.Key"].outer, "android.demo.Widget")
         self.assertTrue(c["android.demo.Base"].abstract)
+        level = [m for m in c["android.demo.Widget"].members if m.name == "LEVEL"][0]
+        self.assertEqual(level.since, 30)  # `/** @since N */` is kept (api_levels.py reads it)
+        self.assertIsNone([m for m in c["android.demo.Widget"].members if m.name == "NAME"][0].since)
 
     def test_full_class_members_types_and_overrides(self):
         self.gen("android.demo.Widget")
@@ -138,6 +143,9 @@ class GenStubsTest(unittest.TestCase):
         self.assertIn("public static final long BIG = 4294967296L;", w)
         self.assertIn("public static final double RATIO = 0.5;", w)
         self.assertIn('public static final java.lang.String NAME = "widget";', w)
+        # A static final without a value (like Build.VERSION.SDK_INT) is no compile-time constant:
+        # Kotlin must read it at run time, not fold `if (SDK_INT >= N)` with the stub's 0.
+        self.assertIn("public static final int LEVEL = Integer.valueOf((int) 0);", w)
         self.assertIn("public float size;", w)  # override
         self.assertIn("public long getTimestamp()", w)  # override
         self.assertIn("public <T> T get(android.demo.Widget.Key<T> p0)", w)  # generic restored

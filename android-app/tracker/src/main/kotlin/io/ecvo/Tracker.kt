@@ -1,6 +1,5 @@
 package io.ecvo
 
-import java.lang.ref.Cleaner
 import java.nio.ByteBuffer
 import java.util.concurrent.locks.ReentrantReadWriteLock
 import java.util.logging.Logger
@@ -59,9 +58,11 @@ interface PoseTracker : AutoCloseable {
  * native side throws IllegalArgumentException for bad input and RuntimeException for
  * an internal error.
  *
- * A tracker that becomes unreachable without [close] is released by a [Cleaner] (its
- * native threads would otherwise run until the process ends), which logs a warning:
- * that is a leak in the caller to fix, not a way to release trackers.
+ * Call [close] (or `use`) when done. A tracker that becomes unreachable without [close]
+ * is released by a safety net, a phantom-reference queue drained on a daemon thread
+ * (`java.lang.ref.Cleaner` would need API 33; the app's minSdk is 26), which logs a
+ * warning: that is a leak in the caller to fix, not a way to release trackers (the
+ * native threads run until the garbage collector happens to notice).
  *
  * @throws IllegalArgumentException from the constructor if the native side rejects
  *   [config]; the message names the field.
@@ -69,7 +70,7 @@ interface PoseTracker : AutoCloseable {
  *   [nativeLibraryError] turns that into a message first.
  */
 class Tracker(val config: TrackerConfig) : PoseTracker {
-    /** The native handle and its release, shared with the [Cleaner] (which must not reach this object). */
+    /** The native handle and its release, shared with the reaper (which must not reach this object). */
     private class Handle(var value: Long) : Runnable {
         /** Calls share the read lock; [run] takes the write lock, so it never frees a handle in use. */
         val lock = ReentrantReadWriteLock()
@@ -89,7 +90,7 @@ class Tracker(val config: TrackerConfig) : PoseTracker {
     }
 
     private val handle: Handle
-    private val cleanable: Cleaner.Cleanable
+    private val cleanable: NativeReaper.Cleanable
 
     init {
         val h = NativeBridge.nativeInit(
@@ -100,7 +101,7 @@ class Tracker(val config: TrackerConfig) : PoseTracker {
         )
         check(h != 0L) { "native tracker returned a null handle" }
         handle = Handle(h)
-        cleanable = CLEANER.register(this, handle)
+        cleanable = REAPER.register(this, handle)
     }
 
     private inline fun <T> withHandle(block: (Long) -> T): T = handle.lock.read {
@@ -215,7 +216,19 @@ class Tracker(val config: TrackerConfig) : PoseTracker {
         const val TRAJECTORY_WINDOW: Int = 32_768
 
         private val LOG: Logger = Logger.getLogger("io.ecvo.Tracker")
-        private val CLEANER: Cleaner = Cleaner.create()
+        private val REAPER = NativeReaper("ecvo-tracker-reaper")
+
+        /**
+         * Whether [e] is the native side refusing a frame for its timestamp (not after the
+         * previous accepted frame's, the `TimestampNotIncreasing` error of `ecvo-pipeline`):
+         * that frame is not tracked but later frames are, so a caller may skip it and go on.
+         * Any other exception is not this.
+         */
+        fun isRefusedTimestamp(e: Throwable): Boolean =
+            e is IllegalArgumentException && e.message?.contains(REFUSED_TIMESTAMP) == true
+
+        /** The words of the native message for a refused timestamp (`ecvo-pipeline`'s `TimestampNotIncreasing`). */
+        const val REFUSED_TIMESTAMP: String = "is not after the previous frame's"
 
         /**
          * Loads `libecvo_jni` if it is not loaded yet; null when it is usable, else a

@@ -8,19 +8,27 @@ import android.hardware.camera2.CameraCharacteristics
 import android.hardware.camera2.CameraDevice
 import android.hardware.camera2.CameraManager
 import android.hardware.camera2.CameraMetadata
+import android.hardware.camera2.CaptureRequest
 import android.media.ImageReader
 import android.os.Build
 import android.os.Handler
 import android.os.SystemClock
 import io.ecvo.shared.CameraCalibration
+import io.ecvo.shared.CameraFailure
 import io.ecvo.shared.CameraIntrinsics
 import io.ecvo.shared.CameraPose
+import io.ecvo.shared.ColourWatch
 import io.ecvo.shared.ConfidencePolicy
 import io.ecvo.shared.DepthDecoder
 import io.ecvo.shared.DepthRemap
+import io.ecvo.shared.FailureAction
 import io.ecvo.shared.FramePairer
 import io.ecvo.shared.GrayPlane
 import io.ecvo.shared.IntensityRegistration
+import io.ecvo.shared.LiveCamera
+import io.ecvo.shared.LiveMode
+import io.ecvo.shared.LiveModeDecision
+import io.ecvo.shared.LiveModePolicy
 import io.ecvo.shared.Pairing
 import io.ecvo.shared.PosePolicy
 import io.ecvo.shared.PoseReference
@@ -33,11 +41,15 @@ import io.ecvo.shared.TimestampSource
 
 /**
  * Live frames from a Camera2 depth camera (`ImageFormat.DEPTH16`) with intensity from a
- * colour camera facing the same way (the Y plane of `YUV_420_888`). Every decision is
+ * colour camera facing the same way (the Y plane of `YUV_420_888`), or depth alone (an
+ * all-zero intensity plane, which the engine tracks on depth alone) when there is no such
+ * camera, the phone will not stream both, or no colour frame arrives ([LiveModePolicy];
+ * the mode reaches the screen through `callbacks.mode`). Every decision is
  * made by :shared ([Setup.find] only copies `CameraCharacteristics` into it): the stream
- * sizes, the 16:9 crop and the intrinsics, lens distortion, the depth-to-colour pose,
+ * sizes and the intrinsics, lens distortion, the depth-to-colour pose,
  * pairing by clock, and the confidence policy. Frames reach [callbacks] on [handler]'s
- * thread as 320x180 millimetres and 8-bit gray; every failure (including a throwing
+ * thread at the depth stream's native size (a 240x180 ToF stream stays 240x180 with its
+ * own intrinsics) as millimetres and 8-bit gray; every failure (including a throwing
  * Camera2 call) reaches `callbacks.failed`, never the thread's uncaught handler.
  */
 class DepthCameraSource(
@@ -53,12 +65,15 @@ class DepthCameraSource(
     class Setup(
         val depthId: String,
         val depthSize: StreamSize,
-        val colourId: String,
-        val colourSize: StreamSize,
-        /** Depth stream to tracker frame: crop, scale, undistort; its camera is the tracker's. */
+        /** The colour camera for intensity, or null (depth only). */
+        val colour: Colour?,
+        /** Depth stream to tracker frame (same size; undistorts if needed); its camera is the tracker's. */
         val remap: DepthRemap,
-        val registration: IntensityRegistration,
-        val pairing: Pairing,
+        /** The mode to start in ([LiveModePolicy.start]). */
+        val mode: LiveModeDecision,
+        /** The depth camera's `SENSOR_ORIENTATION` (degrees) and whether it faces the back, for gravity. */
+        val sensorOrientation: Int,
+        val backFacing: Boolean,
         /** Sentences for the user about fallbacks taken (no calibration, no lens pose, clocks). */
         val notes: List<String>,
     ) {
@@ -66,25 +81,40 @@ class DepthCameraSource(
         val frame: CameraIntrinsics get() = remap.camera
     }
 
+    /** The colour camera of a [Setup]. */
+    class Colour(val id: String, val size: StreamSize, val registration: IntensityRegistration, val pairing: Pairing)
+
     private val depthReader = ImageReader.newInstance(setup.depthSize.width, setup.depthSize.height, ImageFormat.DEPTH16, 3)
-    private val colourReader = ImageReader.newInstance(setup.colourSize.width, setup.colourSize.height, ImageFormat.YUV_420_888, 3)
-    private val devices = ArrayList<CameraDevice>()
-    private val sessions = ArrayList<CameraCaptureSession>()
+    private val colourReader = setup.colour?.let { ImageReader.newInstance(it.size.width, it.size.height, ImageFormat.YUV_420_888, 3) }
+    /** Cameras opened and not closed yet, by id (camera thread). */
+    private val devices = HashMap<String, CameraDevice>()
+    private val sessions = HashMap<String, CameraCaptureSession>()
+    private var readersClosed = false
     private val decoder = DepthDecoder(confidence)
-    val pairer = FramePairer(setup.pairing)
+    val pairer = FramePairer(setup.colour?.pairing ?: Pairing.ARRIVAL_TIME)
+    private val watch = ColourWatch()
     private val rawDepth = ShortArray(setup.depthSize.width * setup.depthSize.height)
     private val frameDepth = ShortArray(setup.frame.pixels)
-    private val y = ByteArray(setup.colourSize.width * setup.colourSize.height)
+    /** The intensity of a depth-only frame: all zero, which the engine tracks on depth alone. */
+    private val noIntensity = ByteArray(setup.frame.pixels)
+    private val y = ByteArray(setup.colour?.let { it.size.width * it.size.height } ?: 0)
     private var confidenceNoted = false
+    private var colourFrames = 0
+    private var colourRequest: CaptureRequest.Builder? = null
     @Volatile private var running = false
+    @Volatile var mode: LiveMode = setup.mode.mode
+        private set
 
-    /** Opens both cameras and starts streaming. Call with the CAMERA permission granted. */
+    /** Opens the cameras (depth first) and starts streaming. Call with the CAMERA permission granted. */
     fun start(): DepthCameraSource {
         running = true
-        colourReader.setOnImageAvailableListener({ r -> guarded("colour frame") { onColour(r) } }, handler)
         depthReader.setOnImageAvailableListener({ r -> guarded("depth frame") { onDepth(r) } }, handler)
-        open(setup.colourId, colourReader)
-        open(setup.depthId, depthReader)
+        colourReader?.setOnImageAvailableListener({ r -> guarded("colour frame") { onColour(r) } }, handler)
+        callbacks.mode(mode)
+        setup.mode.note?.let { callbacks.notice(it) }
+        open(setup.depthId, LiveCamera.DEPTH, depthReader)
+        val c = setup.colour
+        if (mode == LiveMode.DEPTH_AND_COLOUR && c != null && colourReader != null) open(c.id, LiveCamera.COLOUR, colourReader)
         return this
     }
 
@@ -99,16 +129,35 @@ class DepthCameraSource(
     private fun onColour(r: ImageReader) {
         val img = r.acquireLatestImage() ?: return
         try {
+            if (mode != LiveMode.DEPTH_AND_COLOUR) return
+            val size = setup.colour?.size ?: return
             val p = img.planes[0] // Y: pixel stride 1, rows rowStride apart
             val b = p.buffer
-            val w = setup.colourSize.width
-            for (row in 0 until setup.colourSize.height) {
+            for (row in 0 until size.height) {
                 b.position(row * p.rowStride)
-                b.get(y, row * w, w)
+                b.get(y, row * size.width, size.width)
             }
+            watch.onColour()
             pairer.onColour(img.timestamp, SystemClock.elapsedRealtimeNanos())
         } finally {
             img.close()
+        }
+        colourFrames++
+        if (colourFrames == AE_LOCK_AFTER_FRAMES) lockExposure()
+    }
+
+    /**
+     * Locks the colour camera's auto-exposure once it had [AE_LOCK_AFTER_FRAMES] frames to
+     * converge: the tracker's photometric terms assume a point keeps its brightness, which
+     * free-running exposure breaks whenever the view changes.
+     */
+    private fun lockExposure() {
+        val id = setup.colour?.id ?: return
+        val session = sessions[id] ?: return
+        val request = colourRequest ?: return
+        guarded("camera $id: locking exposure") {
+            request.set(CaptureRequest.CONTROL_AE_LOCK, true)
+            session.setRepeatingRequest(request.build(), null, handler)
         }
     }
 
@@ -126,76 +175,143 @@ class DepthCameraSource(
             confidenceNoted = true
             callbacks.notice("This depth camera's confidence codes do not follow Android's documentation; every measured pixel is kept.")
         }
-        if (!running || !pairer.onDepth(ts, SystemClock.elapsedRealtimeNanos())) return
+        if (!running) return
+        val colour = setup.colour
+        if (mode == LiveMode.DEPTH_AND_COLOUR && colour != null) {
+            if (watch.onDepth()) {
+                switchToDepthOnly("no colour frames arrived")
+            } else {
+                if (!pairer.onDepth(ts, SystemClock.elapsedRealtimeNanos())) return
+                setup.remap.apply(rawDepth, frameDepth)
+                val gray = colour.registration.register(frameDepth, GrayPlane(y, colour.size.width, colour.size.height))
+                onTracked(frameDepth, gray)
+                callbacks.frame(ts, frameDepth, gray)
+                return
+            }
+        }
         setup.remap.apply(rawDepth, frameDepth)
-        val gray = setup.registration.register(frameDepth, GrayPlane(y, setup.colourSize.width, setup.colourSize.height))
-        onTracked(frameDepth, gray)
-        callbacks.frame(ts, frameDepth, gray)
+        onTracked(frameDepth, noIntensity)
+        callbacks.frame(ts, frameDepth, noIntensity)
+    }
+
+    /** Closes the colour camera; depth goes on alone. */
+    private fun switchToDepthOnly(why: String) {
+        if (mode == LiveMode.DEPTH_ONLY) return
+        mode = LiveMode.DEPTH_ONLY
+        callbacks.mode(mode)
+        callbacks.notice(LiveModePolicy.fallbackNote(why))
+        val id = setup.colour?.id ?: return
+        sessions.remove(id)?.let { runCatching { it.close() } }
+        devices[id]?.let { runCatching { it.close() } } // removed in onClosed
+    }
+
+    /** Closes both cameras and reopens the depth camera alone (after the colour one took its place). */
+    private fun restartDepthOnly(why: String) {
+        mode = LiveMode.DEPTH_ONLY
+        callbacks.mode(mode)
+        callbacks.notice(LiveModePolicy.fallbackNote(why))
+        sessions.values.forEach { runCatching { it.close() } }
+        sessions.clear()
+        devices.values.toList().forEach { runCatching { it.close() } }
+        handler.postDelayed({ if (running) open(setup.depthId, LiveCamera.DEPTH, depthReader) }, REOPEN_DELAY_MS)
+    }
+
+    private fun onCameraFailed(id: String, camera: LiveCamera, failure: CameraFailure, message: String) {
+        if (!running) return
+        when (LiveModePolicy.onFailure(mode, camera, failure)) {
+            FailureAction.CONTINUE_DEPTH_ONLY -> switchToDepthOnly(message)
+            FailureAction.RESTART_DEPTH_ONLY -> restartDepthOnly(message)
+            FailureAction.FAIL -> callbacks.failed(message)
+        }
+        if (camera == LiveCamera.DEPTH && devices[id] == null) closeReadersIfIdle()
+    }
+
+    /** The readers are closed only once no camera is open (a closing camera may still write to them). */
+    private fun closeReadersIfIdle() {
+        if (running || devices.isNotEmpty() || readersClosed) return
+        readersClosed = true
+        depthReader.close()
+        colourReader?.close()
     }
 
     @SuppressLint("MissingPermission")
-    private fun open(id: String, reader: ImageReader) {
+    private fun open(id: String, camera: LiveCamera, reader: ImageReader) {
         try {
             manager.openCamera(id, object : CameraDevice.StateCallback() {
                 override fun onOpened(device: CameraDevice) {
-                    if (!running) { device.close(); return }
-                    devices += device
+                    devices[id] = device
+                    if (!running || (camera == LiveCamera.COLOUR && mode != LiveMode.DEPTH_AND_COLOUR)) { device.close(); return }
                     guarded("camera $id") {
                         @Suppress("DEPRECATION")
                         device.createCaptureSession(listOf(reader.surface), object : CameraCaptureSession.StateCallback() {
                             override fun onConfigured(session: CameraCaptureSession) {
-                                if (!running) { session.close(); return }
-                                sessions += session
+                                if (!running || devices[id] !== device) { session.close(); return }
+                                sessions[id] = session
                                 // Throws CameraAccessException, IllegalStateException (closed) or IllegalArgumentException.
                                 guarded("camera $id: starting the stream") {
-                                    val request = device.createCaptureRequest(CameraDevice.TEMPLATE_PREVIEW)
+                                    // Colour: TEMPLATE_RECORD (a steady frame rate), exposure locked after it converged.
+                                    val template = if (camera == LiveCamera.COLOUR) CameraDevice.TEMPLATE_RECORD else CameraDevice.TEMPLATE_PREVIEW
+                                    val request = device.createCaptureRequest(template)
                                     request.addTarget(reader.surface)
+                                    if (camera == LiveCamera.COLOUR) colourRequest = request
                                     session.setRepeatingRequest(request.build(), null, handler)
                                 }
                             }
 
                             override fun onConfigureFailed(session: CameraCaptureSession) =
-                                callbacks.failed("camera $id: stream configuration failed")
+                                onCameraFailed(id, camera, CameraFailure.OTHER, "camera $id: stream configuration failed")
                         }, handler)
                     }
+                }
+
+                override fun onClosed(device: CameraDevice) {
+                    if (devices[id] === device) devices.remove(id)
+                    closeReadersIfIdle()
                 }
 
                 override fun onDisconnected(device: CameraDevice) {
                     device.close()
                     // Ignored by the controller if this source was already replaced.
-                    callbacks.failed("camera $id was disconnected")
+                    onCameraFailed(id, camera, CameraFailure.DISCONNECTED, "camera $id was disconnected")
                 }
 
                 override fun onError(device: CameraDevice, error: Int) {
                     device.close()
-                    callbacks.failed(
-                        if (error == CameraDevice.StateCallback.ERROR_MAX_CAMERAS_IN_USE || error == CameraDevice.StateCallback.ERROR_CAMERA_IN_USE) {
-                            "camera $id is in use; this phone may not stream the depth and colour cameras at once"
-                        } else {
-                            "camera $id failed (error $error)"
-                        },
+                    val inUse = error == CameraDevice.StateCallback.ERROR_MAX_CAMERAS_IN_USE || error == CameraDevice.StateCallback.ERROR_CAMERA_IN_USE
+                    onCameraFailed(
+                        id, camera, if (inUse) CameraFailure.IN_USE else CameraFailure.OTHER,
+                        if (inUse) "camera $id is in use; this phone may not stream the depth and colour cameras at once" else "camera $id failed (error $error)",
                     )
                 }
             }, handler)
         } catch (e: CameraAccessException) {
-            callbacks.failed("camera $id: ${e.message}")
+            onCameraFailed(id, camera, CameraFailure.OTHER, "camera $id: ${e.message}")
         } catch (e: SecurityException) {
             callbacks.failed("camera $id: camera permission missing")
         }
     }
 
-    /** Stops streaming and closes the cameras and readers (on the camera thread). */
+    /**
+     * Stops streaming and closes the cameras (on the camera thread); the readers are closed
+     * after the last camera reported `onClosed`, never under a camera still closing.
+     */
     override fun stop() {
         running = false
         handler.post {
-            sessions.forEach { runCatching { it.close() } }
-            devices.forEach { runCatching { it.close() } }
-            sessions.clear(); devices.clear()
-            depthReader.close(); colourReader.close()
+            sessions.values.forEach { runCatching { it.close() } }
+            sessions.clear()
+            devices.values.toList().forEach { runCatching { it.close() } }
+            closeReadersIfIdle()
         }
     }
 
     companion object {
+        /** Colour frames the auto-exposure has to converge before it is locked (about 1 s). */
+        private const val AE_LOCK_AFTER_FRAMES = 30
+
+        /** Wait before reopening the depth camera alone, after closing both. */
+        private const val REOPEN_DELAY_MS = 300L
+
         /**
          * Whether some camera has the `DEPTH_OUTPUT` capability (readable without the
          * CAMERA permission; the calibration is read later, by [find]).
@@ -206,12 +322,13 @@ class DepthCameraSource(
         }
 
         /**
-         * Finds a camera with `DEPTH_OUTPUT` and DEPTH16 streams and a colour camera facing
-         * the same way, reading their calibration; null if the phone has no depth camera.
+         * Finds a camera with `DEPTH_OUTPUT` and DEPTH16 streams and, if there is one, a
+         * colour camera facing the same way (without one, live tracking runs on depth
+         * alone), reading their calibration; null if the phone has no depth camera.
          * Call at the start of a session, after the CAMERA permission was granted: without
          * it, Camera2 hides `LENS_INTRINSIC_CALIBRATION` and `LENS_POSE_*`.
          */
-        fun find(manager: CameraManager, frameWidth: Int = 320, frameHeight: Int = 180): Setup? {
+        fun find(manager: CameraManager): Setup? {
             val ids = manager.cameraIdList
             for (depthId in ids) {
                 val dc = manager.getCameraCharacteristics(depthId)
@@ -219,7 +336,8 @@ class DepthCameraSource(
                 if (CameraMetadata.REQUEST_AVAILABLE_CAPABILITIES_DEPTH_OUTPUT !in caps) continue
                 val sizes = dc.get(CameraCharacteristics.SCALER_STREAM_CONFIGURATION_MAP)?.getOutputSizes(ImageFormat.DEPTH16)
                     ?.map { StreamSize(it.width, it.height) } ?: continue
-                val depthSize = StreamSizes.depth(sizes, frameWidth, frameHeight) ?: continue
+                // Tracked at the stream's native size (240x180 stays 240x180): no crop, no upsampling.
+                val depthSize = StreamSizes.nativeDepth(sizes) ?: continue
                 val facing = dc.get(CameraCharacteristics.LENS_FACING)
                 // Colour cameras facing the same way; the largest sensor is the "primary" one.
                 val colours = ids.filter { id ->
@@ -229,33 +347,46 @@ class DepthCameraSource(
                                 ?.contains(CameraMetadata.REQUEST_AVAILABLE_CAPABILITIES_BACKWARD_COMPATIBLE) == true
                     }
                 }
-                if (colours.isEmpty()) continue
-                val primary = colours.maxBy { id ->
-                    manager.getCameraCharacteristics(id).get(CameraCharacteristics.SENSOR_INFO_ACTIVE_ARRAY_SIZE)?.let { it.width().toLong() * it.height() } ?: 0L
-                }
-                val colourId = colours.first()
-                val cc = manager.getCameraCharacteristics(colourId)
-                val yuv = cc.get(CameraCharacteristics.SCALER_STREAM_CONFIGURATION_MAP)?.getOutputSizes(ImageFormat.YUV_420_888)
-                    ?.map { StreamSize(it.width, it.height) } ?: continue
-                val colourSize = StreamSizes.colour(yuv, depthSize, frameWidth) ?: continue
-
                 val notes = ArrayList<String>()
                 val depthCal = calibration(dc)
-                val colourCal = calibration(cc)
                 if (!depthCal.calibrated) notes += "The depth camera publishes no intrinsic calibration; its focal length is estimated from the lens and sensor size."
                 val depthCam = depthCal.sensorIntrinsics().forOutput(depthSize.width, depthSize.height)
-                val colourCam = colourCal.sensorIntrinsics().forOutput(colourSize.width, colourSize.height)
-                val remap = DepthRemap.create(depthCam, frameWidth, frameHeight, depthCal.effectiveDistortion)
-                val decision = PosePolicy.decide(pose(dc), pose(cc), colourIsPrimary = colourId == primary)
-                decision.note?.let { notes += it }
-                val pairing = Pairing.choose(clock(dc), clock(cc))
-                if (pairing == Pairing.ARRIVAL_TIME) notes += "The cameras' timestamps are not on a common clock; depth and colour are paired by arrival time."
+                val remap = DepthRemap.create(depthCam, depthSize.width, depthSize.height, depthCal.effectiveDistortion)
+                val colour = colourFor(manager, dc, colours, depthSize, remap, notes)
+                // Which cameras the phone guarantees to stream at once (API 30+); before, unknown.
+                val concurrent: List<Set<String>>? = if (Build.VERSION.SDK_INT >= 30) manager.concurrentCameraIds.map { it.toSet() } else null
                 return Setup(
-                    depthId, depthSize, colourId, colourSize, remap,
-                    IntensityRegistration(remap.camera, colourCam, decision.depthToColour), pairing, notes,
+                    depthId, depthSize, colour, remap, LiveModePolicy.start(depthId, colour?.id, concurrent),
+                    dc.get(CameraCharacteristics.SENSOR_ORIENTATION) ?: 0,
+                    facing != CameraMetadata.LENS_FACING_FRONT, notes,
                 )
             }
             return null
+        }
+
+        /** The first colour camera of [colours] with a YUV stream, with its registration to the depth frame; null if none. */
+        private fun colourFor(
+            manager: CameraManager, dc: CameraCharacteristics, colours: List<String>, depthSize: StreamSize, remap: DepthRemap, notes: MutableList<String>,
+        ): Colour? {
+            val colourId = colours.firstOrNull() ?: return null
+            // The largest sensor is the "primary" one.
+            val primary = colours.maxBy { id ->
+                manager.getCameraCharacteristics(id).get(CameraCharacteristics.SENSOR_INFO_ACTIVE_ARRAY_SIZE)?.let { it.width().toLong() * it.height() } ?: 0L
+            }
+            val cc = manager.getCameraCharacteristics(colourId)
+            val yuv = cc.get(CameraCharacteristics.SCALER_STREAM_CONFIGURATION_MAP)?.getOutputSizes(ImageFormat.YUV_420_888)
+                ?.map { StreamSize(it.width, it.height) } ?: return null
+            val colourSize = StreamSizes.colour(yuv, depthSize, depthSize.width) ?: return null
+            val colourCam = calibration(cc).sensorIntrinsics().forOutput(colourSize.width, colourSize.height)
+            val decision = PosePolicy.decide(
+                pose(dc), pose(cc), colourIsPrimary = colourId == primary,
+                depthOrientation = dc.get(CameraCharacteristics.SENSOR_ORIENTATION) ?: 0,
+                colourOrientation = cc.get(CameraCharacteristics.SENSOR_ORIENTATION) ?: 0,
+            )
+            decision.note?.let { notes += it }
+            val pairing = Pairing.choose(clock(dc), clock(cc))
+            if (pairing == Pairing.ARRIVAL_TIME) notes += "The cameras' timestamps are not on a common clock; depth and colour are paired by arrival time."
+            return Colour(colourId, colourSize, IntensityRegistration(remap.camera, colourCam, decision.depthToColour), pairing)
         }
 
         private fun calibration(c: CameraCharacteristics): CameraCalibration {

@@ -11,8 +11,11 @@ import java.io.File
 import java.io.FileNotFoundException
 
 /**
- * Serves the app's exported zips (`cache/exports/<name>.zip`) read-only to the app the
- * user picks in the share sheet, which gets a one-time read grant. A platform
+ * Serves the app's exported zips (`cache/exports/<name>.zip`: a session, or any recording
+ * of any run of the app, zipped by `ExportFiles.pack`) read-only to the app the user picks
+ * in the share sheet, which gets a one-time read grant. This is how recordings leave the
+ * phone on Android 11+, where no other app (nor the system file picker) reads
+ * `Android/data/io.ecvo.app`. A platform
  * ContentProvider in a few lines instead of AndroidX's FileProvider (the app uses no
  * AndroidX).
  */

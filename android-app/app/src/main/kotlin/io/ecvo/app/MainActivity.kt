@@ -8,11 +8,13 @@ import android.content.Intent
 import android.content.pm.PackageManager
 import android.graphics.Bitmap
 import android.hardware.camera2.CameraManager
+import android.os.Build
 import android.os.Bundle
 import android.os.Handler
 import android.os.Looper
 import android.util.Log
 import android.view.View
+import android.view.WindowInsets
 import android.view.WindowManager
 import android.widget.Button
 import android.widget.ImageView
@@ -20,6 +22,8 @@ import android.widget.RadioGroup
 import android.widget.TextView
 import android.widget.Toast
 import android.widget.ToggleButton
+import android.window.OnBackInvokedCallback
+import android.window.OnBackInvokedDispatcher
 import io.ecvo.ReferenceFrame
 import io.ecvo.Tracker
 import io.ecvo.TrackerConfig
@@ -27,9 +31,13 @@ import io.ecvo.shared.AppSettings
 import io.ecvo.shared.CameraIntrinsics
 import io.ecvo.shared.ConfidencePolicy
 import io.ecvo.shared.DirectoryFiles
+import io.ecvo.shared.ExportFiles
+import io.ecvo.shared.ExportPlan
+import io.ecvo.shared.ExportSelection
 import io.ecvo.shared.FrameSource
 import io.ecvo.shared.PreviewKind
 import io.ecvo.shared.ProjectionPlane
+import io.ecvo.shared.RecordingEntry
 import io.ecvo.shared.Recordings
 import io.ecvo.shared.SessionController
 import io.ecvo.shared.SessionExport
@@ -82,6 +90,23 @@ class MainActivity : Activity() {
     override fun onCreate(savedInstanceState: Bundle?) {
         super.onCreate(savedInstanceState)
         setContentView(R.layout.activity_main)
+        // targetSdk 35: Android 15 draws the window edge to edge, under the status and
+        // navigation bars; the root pads itself by their insets (and the cutout's).
+        val root = findViewById<View>(R.id.root)
+        val pad = root.paddingLeft
+        root.setOnApplyWindowInsetsListener { v, insets -> applyInsets(v, insets, pad) }
+        root.requestApplyInsets()
+        // Back ends the session. On Android 12+ the default Back of a root activity only
+        // moves the task behind (the session would go on); on 13+ with predictive back
+        // the system calls this callback instead of onBackPressed.
+        if (Build.VERSION.SDK_INT >= 33) {
+            onBackInvokedDispatcher.registerOnBackInvokedCallback(
+                OnBackInvokedDispatcher.PRIORITY_DEFAULT,
+                object : OnBackInvokedCallback {
+                    override fun onBackInvoked() = finish()
+                },
+            )
+        }
         stateText = findViewById(R.id.status_state)
         numbersText = findViewById(R.id.status_numbers)
         messageText = findViewById(R.id.status_message)
@@ -118,6 +143,8 @@ class MainActivity : Activity() {
         // Not granted yet is not a denial: the user is asked when they press Live.
         if (hasDepthCamera && hasCameraPermission()) controller.presenter.onCameraPermission(true)
         render()
+        // A rotation closed the dialog that was open: show it again.
+        savedInstanceState?.getString(STATE_DIALOG)?.let { reopenDialog(it) }
     }
 
     override fun onResume() {
@@ -140,13 +167,76 @@ class MainActivity : Activity() {
         super.onPause()
     }
 
+    @Deprecated("Called up to Android 12L, and on 13+ without predictive back")
+    @Suppress("DEPRECATION")
+    override fun onBackPressed() {
+        finish() // not super: on 12+ that only moves a root activity's task to the back
+    }
+
+    /** Pads [v] by the system bars' and cutout's insets plus its own [pad]. */
+    private fun applyInsets(v: View, insets: WindowInsets, pad: Int): WindowInsets {
+        if (Build.VERSION.SDK_INT >= 30) {
+            val i = insets.getInsets(WindowInsets.Type.systemBars() or WindowInsets.Type.displayCutout())
+            v.setPadding(pad + i.left, pad + i.top, pad + i.right, pad + i.bottom)
+        } else {
+            @Suppress("DEPRECATION")
+            v.setPadding(
+                pad + insets.systemWindowInsetLeft, pad + insets.systemWindowInsetTop,
+                pad + insets.systemWindowInsetRight, pad + insets.systemWindowInsetBottom,
+            )
+        }
+        return insets
+    }
+
     override fun onDestroy() {
         // Leaving the app (back) ends the session; a rotation keeps it.
         if (isFinishing && !isChangingConfigurations) {
             SessionHolder.resumeLive = false
             controller.reset()
         }
+        // A dialog left open would leak its window; onSaveInstanceState noted it for the next activity.
+        dialog?.let { d -> dialog = null; d.dismiss() }
         super.onDestroy()
+    }
+
+    /** The dialog on screen and what it shows, to reopen it after a rotation. */
+    private var dialog: AlertDialog? = null
+    private var dialogKind: String? = null
+
+    private fun keep(kind: String, d: AlertDialog) {
+        dialog = d
+        dialogKind = kind
+        d.setOnDismissListener { if (dialog === d) { dialog = null; dialogKind = null } }
+    }
+
+    override fun onSaveInstanceState(outState: Bundle) {
+        super.onSaveInstanceState(outState)
+        dialogKind?.let { outState.putString(STATE_DIALOG, it) }
+    }
+
+    /** Reopens the dialog a rotation closed ([kind] as [keep] named it). */
+    private fun reopenDialog(kind: String) {
+        when {
+            kind == "settings" -> showSettings()
+            kind == "recordings" -> showRecordings()
+            kind == "permission" -> onLiveClicked()
+            kind.startsWith("recording:") || kind.startsWith("delete:") -> {
+                val name = kind.substringAfter(':')
+                val root = recordingsDir
+                Thread(Runnable {
+                    val r = try {
+                        Recordings.list(root).firstOrNull { it.name == name }
+                    } catch (e: Exception) {
+                        null
+                    }
+                    ui.post {
+                        if (r != null && !isFinishing && !isDestroyed) {
+                            if (kind.startsWith("delete:")) confirmDelete(r) else showRecordingActions(r)
+                        }
+                    }
+                }, "ecvo-recordings").start()
+            }
+        }
     }
 
     private fun hasCameraPermission() = checkSelfPermission(Manifest.permission.CAMERA) == PackageManager.PERMISSION_GRANTED
@@ -156,12 +246,12 @@ class MainActivity : Activity() {
         when {
             hasCameraPermission() -> startLive()
             shouldShowRequestPermissionRationale(Manifest.permission.CAMERA) ->
-                AlertDialog.Builder(this)
+                keep("permission", AlertDialog.Builder(this)
                     .setTitle(R.string.permission_title)
                     .setMessage(R.string.permission_rationale)
                     .setPositiveButton(R.string.permission_continue) { _, _ -> requestPermissions(arrayOf(Manifest.permission.CAMERA), REQUEST_CAMERA) }
                     .setNegativeButton(R.string.permission_not_now) { _, _ -> controller.presenter.onCameraPermission(false); render() }
-                    .show()
+                    .show())
             else -> requestPermissions(arrayOf(Manifest.permission.CAMERA), REQUEST_CAMERA)
         }
     }
@@ -186,7 +276,8 @@ class MainActivity : Activity() {
         pointCloud = settings.pointCloud,
     )
 
-    private fun startReplay(files: StreamFiles) {
+    /** Replays [files]; [recording] is the recordings folder it comes from (null: the bundled sample). */
+    private fun startReplay(files: StreamFiles, recording: File? = null) {
         val reader = try {
             StreamReader(files)
         } catch (e: Exception) {
@@ -196,12 +287,14 @@ class MainActivity : Activity() {
             return
         }
         SessionHolder.camera = null
+        GravitySensor.clear(this) // no gravity in a recording: the first camera's x-z top view
         SessionHolder.resumeLive = false
         trajectoryView.clear()
         SessionHolder.previewSize = reader.camera.width to reader.camera.height
-        controller.start(FrameSource.REPLAY, trackerConfig(reader.camera, FrameSource.REPLAY)) { cb ->
+        val started = controller.start(FrameSource.REPLAY, trackerConfig(reader.camera, FrameSource.REPLAY)) { cb ->
             ReplaySource(reader, cb) { d, g -> if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g) }.start()
         }
+        if (started) SessionHolder.streams.onStarted(recording)
         render()
     }
 
@@ -226,8 +319,10 @@ class MainActivity : Activity() {
             return
         }
         liveSetup = setup
+        GravitySensor.measure(this, setup.sensorOrientation, setup.backFacing)
         trajectoryView.clear()
         if (controller.start(FrameSource.LIVE, trackerConfig(setup.frame, FrameSource.LIVE)) { cb -> openCamera(setup, cb) }) {
+            SessionHolder.streams.onStarted(null)
             setup.notes.forEach { controller.presenter.onNotice(it) }
         }
         render()
@@ -252,51 +347,109 @@ class MainActivity : Activity() {
         if (on) {
             val name = SimpleDateFormat("yyyyMMdd-HHmmss", Locale.ROOT).format(Date())
             val dir = File(recordingsDir, name)
-            if (controller.startRecording { cam -> StreamRecorder(dir, cam) }) SessionHolder.lastRecording = dir
+            if (controller.startRecording { cam -> StreamRecorder(dir, cam) }) SessionHolder.streams.onRecording(dir)
         } else {
             val r = controller.stopRecording()
-            if (r != null) Toast.makeText(this, getString(R.string.recorded_to, r.framesWritten, r.dir.path), Toast.LENGTH_LONG).show()
+            if (r != null) {
+                val dropped = controller.recordingDropped
+                val text = getString(R.string.recorded_to, r.framesWritten, r.dir.path) +
+                    (if (dropped > 0) getString(R.string.recorded_dropped, dropped) else "")
+                Toast.makeText(this, text, Toast.LENGTH_LONG).show()
+            }
         }
         render()
     }
 
+    /** Lists the recordings on a worker thread (it reads every folder), then shows them. */
     private fun showRecordings() {
-        val list = Recordings.list(recordingsDir)
+        val root = recordingsDir
+        Thread(Runnable {
+            val list = try {
+                Recordings.list(root)
+            } catch (e: Exception) {
+                emptyList()
+            }
+            ui.post { if (!isFinishing && !isDestroyed) showRecordingList(list) }
+        }, "ecvo-recordings").start()
+    }
+
+    private fun showRecordingList(list: List<RecordingEntry>) {
         if (list.isEmpty()) {
             Toast.makeText(this, R.string.no_recordings, Toast.LENGTH_LONG).show()
             return
         }
         val labels = list.map { String.format(Locale.ROOT, "%s · %d frames · %.1f MB", it.name, it.frames, it.bytes / 1e6) }.toTypedArray<CharSequence>()
-        AlertDialog.Builder(this)
+        keep("recordings", AlertDialog.Builder(this)
             .setTitle(R.string.recordings_title)
-            .setItems(labels) { _, which -> startReplay(DirectoryFiles(list[which].dir)) }
+            .setItems(labels) { _, which -> showRecordingActions(list[which]) }
             .setNegativeButton(R.string.close, null)
-            .show()
+            .show())
     }
 
+    /** Replay, export or delete one recording. */
+    private fun showRecordingActions(r: RecordingEntry) {
+        val actions = arrayOf<CharSequence>(getString(R.string.recording_replay), getString(R.string.recording_export), getString(R.string.recording_delete))
+        keep("recording:" + r.name, AlertDialog.Builder(this)
+            .setTitle(r.name)
+            .setItems(actions) { _, which ->
+                when (which) {
+                    0 -> startReplay(DirectoryFiles(r.dir), r.dir)
+                    1 -> export(ExportSelection.forRecording(r.dir, controller.session != null, SessionHolder.streams.stream), r.name)
+                    else -> confirmDelete(r)
+                }
+            }
+            .setNegativeButton(R.string.close, null)
+            .show())
+    }
+
+    private fun confirmDelete(r: RecordingEntry) {
+        keep("delete:" + r.name, AlertDialog.Builder(this)
+            .setTitle(R.string.recording_delete)
+            .setMessage(getString(R.string.recording_delete_confirm, r.name, r.frames))
+            .setPositiveButton(R.string.recording_delete) { _, _ ->
+                // Not the folder being recorded into, nor the one a running replay reads.
+                val inUse = if (controller.presenter.status.recording || controller.running == FrameSource.REPLAY) SessionHolder.streams.stream else null
+                val root = recordingsDir
+                Thread(Runnable {
+                    val ok = Recordings.delete(root, r.dir, inUse)
+                    ui.post {
+                        if (ok) SessionHolder.streams.onDeleted(r.dir)
+                        Toast.makeText(this, if (ok) getString(R.string.recording_deleted, r.name) else getString(R.string.recording_not_deleted, r.name), Toast.LENGTH_LONG).show()
+                    }
+                }, "ecvo-delete").start()
+            }
+            .setNegativeButton(R.string.close, null)
+            .show())
+    }
+
+    /** The Share button: the session with the stream it replays or recorded. */
     private fun export() {
-        val session = controller.session
-        if (session == null) {
+        val plan = ExportSelection.forSession(controller.session != null, SessionHolder.streams.stream)
+        if (plan == null) {
             Toast.makeText(this, R.string.nothing_to_export, Toast.LENGTH_LONG).show()
             return
         }
+        export(plan, null)
+    }
+
+    /** Writes [plan] into a new zip on a worker thread (never deleting an earlier one), then shares it. */
+    private fun export(plan: ExportPlan, recordingName: String?) {
         Toast.makeText(this, R.string.exporting, Toast.LENGTH_SHORT).show()
-        val name = "ecvo-" + SimpleDateFormat("yyyyMMdd-HHmmss", Locale.ROOT).format(Date())
+        val stamp = SimpleDateFormat("yyyyMMdd-HHmmss", Locale.ROOT).format(Date())
+        val base = if (recordingName != null) "ecvo-recording-$recordingName" else "ecvo-$stamp"
         val exports = ExportProvider.exportsDir(cacheDir)
-        val recording = SessionHolder.lastRecording
+        val session = if (plan.withSession) controller.session else null
         val withCloud = settings.pointCloud
-        Thread({
+        Thread(Runnable {
             try {
-                exports.deleteRecursively()
-                val dir = File(exports, name)
-                val t = session.tracker
-                // The tracker keeps the latest Tracker.TRAJECTORY_WINDOW poses: export those.
-                val poses = t.trajectorySince(t.stats().trajectoryStart.toInt())
-                SessionExport.write(dir, poses, t.references(), if (withCloud) t.pointCloud(MAX_EXPORT_POINTS) else null)
-                if (recording != null && recording.isDirectory) recording.copyRecursively(File(dir, "stream"))
-                val zip = File(exports, "$name.zip")
-                SessionExport.zip(dir, zip)
-                dir.deleteRecursively()
+                val zip = ExportFiles.pack(plan, exports, base) { dir ->
+                    val t = session?.tracker
+                    if (t != null) {
+                        // The tracker keeps the latest Tracker.TRAJECTORY_WINDOW poses: export those.
+                        val poses = t.trajectorySince(t.stats().trajectoryStart.toInt())
+                        SessionExport.write(dir, poses, t.references(), if (withCloud) t.pointCloud(MAX_EXPORT_POINTS) else null)
+                    }
+                }
                 ui.post { share(zip) }
             } catch (e: Exception) {
                 ui.post { controller.presenter.onNotice("Export failed: ${e.message ?: e.javaClass.simpleName}"); render() }
@@ -340,7 +493,7 @@ class MainActivity : Activity() {
             "${getString(R.string.settings_preview)}: ${s.preview.name.lowercase()}",
             "${getString(R.string.settings_cloud)}: ${if (s.pointCloud) "on" else "off"}",
         )
-        AlertDialog.Builder(this)
+        keep("settings", AlertDialog.Builder(this)
             .setTitle(R.string.settings)
             .setItems(rows) { _, which ->
                 saveSettings(
@@ -356,7 +509,7 @@ class MainActivity : Activity() {
                 showSettings()
             }
             .setNegativeButton(R.string.close, null)
-            .show()
+            .show())
     }
 
     private fun <T> next(v: T, all: List<T>): T = all[(all.indexOf(v) + 1) % all.size]
@@ -388,7 +541,7 @@ class MainActivity : Activity() {
 
     private fun render() {
         val st = controller.presenter.status
-        stateText.text = st.state
+        stateText.text = if (st.mode.isEmpty()) st.state else "${st.state} · ${st.mode}" // e.g. "Tracking · depth only"
         stateText.setTextColor(
             when (st.kind) {
                 StatusKind.TRACKING -> 0xFF34A853.toInt()
@@ -417,6 +570,7 @@ class MainActivity : Activity() {
         private const val PREVIEW_EVERY = 4L
         private const val REQUEST_CAMERA = 1
         private const val PREFS = "ecvo-settings"
+        private const val STATE_DIALOG = "dialog"
         private const val MAX_EXPORT_POINTS = 500_000
     }
 }

@@ -41,6 +41,6 @@ object SessionHolder {
     /** Width and height of the frames the preview shows. */
     @Volatile var previewSize: Pair<Int, Int>? = null
 
-    /** Folder of the last recording made in this process, for export. */
-    var lastRecording: java.io.File? = null
+    /** The stream of the current session (the recording it replays or made), for export. */
+    val streams = io.ecvo.shared.SessionStreams()
 }

@@ -52,6 +52,9 @@ class TrajectoryView @JvmOverloads constructor(context: Context, attrs: Attribut
         this.trajectory = trajectory
         this.references = references
         this.pose = pose?.copyOf()
+        // The top view looks down along gravity once a live session measured it.
+        val up = GravitySensor.up
+        if (projector.up !== up) projector.up = up
         invalidate()
     }
 
@@ -99,6 +102,7 @@ class TrajectoryView @JvmOverloads constructor(context: Context, attrs: Attribut
         val y0 = height - 12 * density
         canvas.drawLine(x0, y0, x0 + bar.lengthPx, y0, axisPaint)
         canvas.drawText(bar.label, x0, y0 - 4 * density, textPaint)
-        canvas.drawText(plane.name, width - 40 * density, y0, textPaint)
+        val label = if (plane == ProjectionPlane.XZ && projector.up != null) "top" else plane.name
+        canvas.drawText(label, width - 40 * density, y0, textPaint)
     }
 }

@@ -171,6 +171,21 @@ object StreamSizes {
     }
 
     /**
+     * The DEPTH16 size to track at its native resolution (the engine takes any size, so
+     * a 240x180 ToF stream stays 240x180 with its own intrinsics: no crop, no upsampling):
+     * the largest size at most [maxWidth] wide (the tracker's cost grows with the pixel
+     * count), else the smallest. Null for an empty list.
+     */
+    fun nativeDepth(sizes: List<StreamSize>, maxWidth: Int = MAX_NATIVE_WIDTH): StreamSize? {
+        if (sizes.isEmpty()) return null
+        val fitting = sizes.filter { it.width <= maxWidth }
+        return if (fitting.isNotEmpty()) fitting.maxBy { it.width.toLong() * it.height } else sizes.minBy { it.width.toLong() * it.height }
+    }
+
+    /** Widest depth stream tracked at its native size (VGA: the largest ToF sensors' size). */
+    const val MAX_NATIVE_WIDTH: Int = 640
+
+    /**
      * The YUV size for intensity: at least twice the frame's width when possible, with
      * the depth stream's aspect if possible, otherwise the closest aspect; the smallest
      * such (cheap to copy).

@@ -46,9 +46,11 @@ class PoseDecision(
  *   primary camera, and the colour camera is that primary camera: the colour camera is
  *   the reference itself (identity at the origin), so the depth pose is composed with it.
  * - Anything else (no pose, different or undefined references): the **fallback**, that
- *   the two cameras share their optical centre and axes (identity). The intensity is then
- *   off by the baseline's parallax (about `f * baseline / z` pixels: 2 px for 1 cm at 1 m
- *   and f = 200 px), which the tracker tolerates better than a wrong rotation.
+ *   the two cameras share their optical centre and optical axis, their image axes turned
+ *   by the difference of their `SENSOR_ORIENTATION`s ([orientationFallback]; identity
+ *   when both sensors are mounted alike). The intensity is then off by the baseline's
+ *   parallax (about `f * baseline / z` pixels: 2 px for 1 cm at 1 m and f = 200 px),
+ *   which the tracker tolerates better than a wrong rotation.
  * - Whatever was composed must keep the depth camera's optical axis within
  *   [MAX_AXIS_ANGLE_DEG] of the colour camera's (the cameras face the same way): a
  *   rotation that turns it further (e.g. a gyroscope-referenced pose composed with an
@@ -59,9 +61,15 @@ object PosePolicy {
     /** Largest angle between the cameras' optical axes accepted from lens poses. */
     const val MAX_AXIS_ANGLE_DEG: Double = 30.0
 
-    fun decide(depth: CameraPose, colour: CameraPose, colourIsPrimary: Boolean): PoseDecision {
+    /**
+     * [depthOrientation] and [colourOrientation] are the cameras' `SENSOR_ORIENTATION`
+     * (degrees clockwise that turn each image upright), used by the fallback.
+     */
+    fun decide(depth: CameraPose, colour: CameraPose, colourIsPrimary: Boolean, depthOrientation: Int = 0, colourOrientation: Int = 0): PoseDecision {
         val fallback = { why: String ->
-            PoseDecision(RigidTransform.IDENTITY, false, "$why; intensity assumes the depth and colour cameras share their centre and axes (a small offset from their baseline).")
+            val turn = Math.floorMod(depthOrientation - colourOrientation, 360)
+            val axes = if (turn == 0) "axes" else "optical axis, their images turned $turn° apart (SENSOR_ORIENTATION)"
+            PoseDecision(orientationFallback(depthOrientation, colourOrientation), false, "$why; intensity assumes the depth and colour cameras share their centre and $axes (a small offset from their baseline).")
         }
         if (!depth.published) return fallback("the depth camera publishes no lens pose")
         if (depth.reference == PoseReference.UNDEFINED) return fallback("the depth camera's lens pose has no defined reference")
@@ -81,5 +89,26 @@ object PosePolicy {
             return fallback(String.format(java.util.Locale.ROOT, "the lens poses turn the depth camera %.0f° away from the colour camera", deg))
         }
         return PoseDecision(composed, true, null)
+    }
+
+    /**
+     * The fallback's depth-to-colour transform for cameras facing the same way: no
+     * translation, a rotation about the optical axis by `depthOrientation -
+     * colourOrientation`. A depth image turned clockwise by `θd` is upright, so a
+     * depth-camera direction `p` is `Rz(θd) p` upright and `Rz(θc)ᵀ Rz(θd) p` in the colour
+     * camera (image x right, y down: `Rz(a)` turns x towards y).
+     */
+    fun orientationFallback(depthOrientation: Int, colourOrientation: Int): RigidTransform {
+        val turn = Math.floorMod(depthOrientation - colourOrientation, 360)
+        if (turn == 0) return RigidTransform.IDENTITY
+        // Exact for the quarter turns Camera2 allows (0, 90, 180, 270).
+        val (c, s) = when (turn) {
+            90 -> 0.0 to 1.0
+            180 -> -1.0 to 0.0
+            270 -> 0.0 to -1.0
+            else -> Math.cos(Math.toRadians(turn.toDouble())) to Math.sin(Math.toRadians(turn.toDouble()))
+        }
+        val ns = if (s == 0.0) 0.0 else -s // no -0.0 in the matrix
+        return RigidTransform(doubleArrayOf(c, ns, 0.0, s, c, 0.0, 0.0, 0.0, 1.0), DoubleArray(3))
     }
 }

@@ -27,6 +27,9 @@ class SourceCallbacks internal constructor(private val controller: SessionContro
     /** Something the user should know that does not stop the source (any thread). */
     fun notice(message: String) = controller.onSourceNotice(token, message)
 
+    /** The live source's mode, shown on screen (any thread). */
+    fun mode(mode: LiveMode) = controller.onSourceMode(token, mode)
+
     /** The source ended normally (end of a replay; any thread). */
     fun finished() = controller.onSourceFinished(token)
 
@@ -133,6 +136,10 @@ class SessionController(
         if (isCurrent(t)) presenter.onNotice(message)
     }
 
+    internal fun onSourceMode(t: Long, mode: LiveMode) = post {
+        if (isCurrent(t)) presenter.onLiveMode(mode)
+    }
+
     internal fun onSourceFinished(t: Long) = post {
         if (isCurrent(t)) stopSource()
     }
@@ -184,7 +191,8 @@ class SessionController(
             rate.sample(now, stats.framesTracked)
             presenter.onTrackerUpdate(t.state, stats, ts, now)
             presenter.onRates(rate.fps, extraDroppedNoColour)
-            presenter.onRecording(s.recording)
+            presenter.onRecording(s.recording, s.recordingDropped)
+            presenter.onSkippedTimestamps(s.refusedTimestamps)
             // Poses older than the tracker's window are gone (a UI that did not poll for
             // that long); draw on from the window's start.
             if (trajectory.nextIndex < stats.trajectoryStart) trajectory.skipTo(stats.trajectoryStart)
@@ -208,7 +216,7 @@ class SessionController(
         }
         return try {
             s.startRecording(make(cam))
-            presenter.onRecording(true)
+            presenter.onRecording(true, 0)
             true
         } catch (e: Exception) {
             presenter.onNotice(describe("Recording could not start", e))
@@ -216,7 +224,10 @@ class SessionController(
         }
     }
 
-    /** Stops recording; the finished recorder, or null. */
+    /** Frames the current session's running or last recording had no room for (its queue was full). */
+    val recordingDropped: Long get() = session?.recordingDropped ?: 0L
+
+    /** Stops recording (waits for the queued frames to be written); the finished recorder, or null. */
     fun stopRecording(): StreamRecorder? {
         val r = try {
             session?.stopRecording()

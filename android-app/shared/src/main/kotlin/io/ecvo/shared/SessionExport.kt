@@ -99,4 +99,15 @@ object Recordings {
             }
             .sortedByDescending { it.name }
     }
+
+    /**
+     * Deletes the recording [dir] if it is a stream folder directly inside [root] and not
+     * [inUse] (being recorded into or replayed); returns whether it was deleted.
+     */
+    fun delete(root: File, dir: File, inUse: File? = null): Boolean {
+        val parent = dir.absoluteFile.parentFile ?: return false
+        if (!sameFile(parent, root) || !File(dir, CameraIntrinsics.FILE_NAME).isFile) return false
+        if (inUse != null && sameFile(inUse, dir)) return false
+        return dir.deleteRecursively()
+    }
 }

@@ -1,7 +1,6 @@
 package io.ecvo.shared
 
 import io.ecvo.TimedPose
-import java.io.Closeable
 import java.io.File
 import java.io.FileOutputStream
 import java.io.IOException
@@ -18,12 +17,13 @@ import java.io.Writer
  *
  * Each frame's PNGs are written before its list lines, and the lists are flushed after
  * every frame, so a recording cut short is still a readable stream up to its last
- * complete frame. Not thread-safe: write from one thread.
+ * complete frame. Not thread-safe: write from one thread (the app records through
+ * [AsyncRecorder], on a thread of its own).
  *
  * @throws IOException if [dir] already holds a stream (`rgb.txt` or `depth.txt`) or
  *   cannot be created.
  */
-class StreamRecorder(val dir: File, val camera: CameraIntrinsics) : Closeable {
+class StreamRecorder(override val dir: File, val camera: CameraIntrinsics) : FrameRecorder {
     private val rgbList: Writer
     private val depthList: Writer
     private val rgbOut: FileOutputStream
@@ -32,7 +32,7 @@ class StreamRecorder(val dir: File, val camera: CameraIntrinsics) : Closeable {
     private var closed = false
 
     /** Frames written so far. */
-    var framesWritten: Int = 0
+    override var framesWritten: Int = 0
         private set
 
     init {
@@ -62,7 +62,7 @@ class StreamRecorder(val dir: File, val camera: CameraIntrinsics) : Closeable {
      * `width * height` values, row-major. The timestamp, rounded to microseconds, must
      * be after the previous frame's; otherwise IllegalArgumentException.
      */
-    fun writeFrame(timestampNs: Long, depth: ShortArray, intensity: ByteArray) {
+    override fun writeFrame(timestampNs: Long, depth: ShortArray, intensity: ByteArray) {
         check(!closed) { "StreamRecorder for $dir is closed" }
         require(timestampNs >= 0) { "$dir: timestamp $timestampNs ns is negative" }
         val n = camera.pixels

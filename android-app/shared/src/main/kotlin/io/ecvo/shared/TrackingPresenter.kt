@@ -19,7 +19,11 @@ data class StatusText(
     val timing: String,
     /** "refs L1 12 · L2 3". */
     val references: String,
-    /** "120 frames · 3 dropped · 1 lost" (and "· 5 without colour" for live depth frames dropped unpaired). */
+    /**
+     * "120 frames · 3 dropped · 1 lost" (and "· 5 without colour" for live depth frames
+     * dropped unpaired, "· 4 not recorded" for frames the recorder could not keep up
+     * with, "· 2 bad timestamps skipped" for frames the tracker refused).
+     */
     val frames: String,
     /** "28.4 fps · filter 4.1 · tracker 7.9 · latency 15.2 ms", or "" before the first tracked frame. */
     val stages: String,
@@ -29,6 +33,8 @@ data class StatusText(
     val canStartLive: Boolean,
     /** Whether frames are being recorded. */
     val recording: Boolean,
+    /** What a live session streams ("depth + colour", "depth only"); "" otherwise. */
+    val mode: String = "",
 )
 
 /**
@@ -53,6 +59,9 @@ class TrackingPresenter(
     private var stalled = false
     private var fps = 0.0
     private var droppedNoColour = 0L
+    private var skippedTimestamps = 0L
+    private var recordingDropped = 0L
+    private var liveMode: LiveMode? = null
     private val notices = LinkedHashSet<String>()
 
     /** The result of looking for a camera with DEPTH_OUTPUT. */
@@ -68,6 +77,8 @@ class TrackingPresenter(
         notices.clear()
         fps = 0.0
         droppedNoColour = 0
+        skippedTimestamps = 0
+        liveMode = null
         state = TrackingState.INITIALISING
         stats = TrackerStats.EMPTY
         lastPoseNs = Long.MIN_VALUE
@@ -100,8 +111,17 @@ class TrackingPresenter(
         this.droppedNoColour = droppedNoColour
     }
 
-    /** Recording switched on or off. */
-    fun onRecording(on: Boolean) { recording = on }
+    /** The live source's mode (it may fall back to depth alone during the session). */
+    fun onLiveMode(mode: LiveMode) { liveMode = mode }
+
+    /** Frames skipped because the tracker refused their timestamp (the session went on). */
+    fun onSkippedTimestamps(count: Long) { skippedTimestamps = count }
+
+    /** Recording switched on or off; [dropped] frames the recorder's queue had no room for. */
+    fun onRecording(on: Boolean, dropped: Long = recordingDropped) {
+        recording = on
+        recordingDropped = dropped
+    }
 
     /**
      * A poll of the tracker at wall-clock [nowNs] (monotonic): its [state], [stats] and
@@ -133,6 +153,8 @@ class TrackingPresenter(
                 append(stats.framesTracked).append(" frames")
                 if (stats.framesDropped > 0) append(" · ").append(stats.framesDropped).append(" dropped")
                 if (droppedNoColour > 0) append(" · ").append(droppedNoColour).append(" without colour")
+                if (recordingDropped > 0) append(" · ").append(recordingDropped).append(" not recorded")
+                if (skippedTimestamps > 0) append(" · ").append(skippedTimestamps).append(" bad timestamps skipped")
                 if (stats.lostFrames > 0) append(" · ").append(stats.lostFrames).append(" lost")
             }
             val stages = if (stats.framesTracked == 0L) "" else String.format(
@@ -147,7 +169,8 @@ class TrackingPresenter(
                 notices.isNotEmpty() -> notices.joinToString("\n")
                 else -> null
             }
-            return StatusText(label, kind, timing, refs, frames, stages, message, depthCamera == true && !permissionDenied, recording)
+            val mode = if (source == FrameSource.LIVE) liveMode?.label ?: "" else ""
+            return StatusText(label, kind, timing, refs, frames, stages, message, depthCamera == true && !permissionDenied, recording, mode)
         }
 
     companion object {

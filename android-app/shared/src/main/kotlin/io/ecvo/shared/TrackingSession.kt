@@ -2,70 +2,91 @@ package io.ecvo.shared
 
 import io.ecvo.PoseTracker
 import io.ecvo.PushStatus
+import io.ecvo.Tracker
+import java.util.concurrent.atomic.AtomicLong
 
 /**
- * One run of the tracker: owns the [PoseTracker] and the optional [StreamRecorder].
- * Frames come in on a source's thread ([push]); the UI thread reads the tracker and
- * switches recording on and off.
+ * One run of the tracker: owns the [PoseTracker] and the optional recorder. Frames come
+ * in on a source's thread ([push]); the UI thread reads the tracker and switches
+ * recording on and off.
  *
- * Every frame the source delivered is recorded, whatever became of it in the tracker
- * (a [PushStatus.DROPPED] frame was queued too: the one dropped was an older one), so
- * that replaying a recording offline sees every frame the camera gave. A recorder that
- * fails (disk full) is closed, what it wrote stays a readable stream, and
- * [onRecordingFailed] is told; tracking goes on.
+ * Every frame the tracker took is recorded, whatever became of it there (a
+ * [PushStatus.DROPPED] frame was queued too: the one dropped was an older one), so that
+ * replaying a recording offline sees every frame the camera gave. Recording runs on its
+ * own thread with a bounded queue ([AsyncRecorder]): a frame that finds the queue full
+ * is not recorded and counted ([recordingDropped]). A recorder that fails (disk full) is
+ * closed, what it wrote stays a readable stream, and [onRecordingFailed] is told (on the
+ * recorder's thread); tracking goes on.
  */
 class TrackingSession(
     val tracker: PoseTracker,
+    private val recorderCapacity: Int = AsyncRecorder.DEFAULT_CAPACITY,
     private val onRecordingFailed: (String) -> Unit = {},
 ) : AutoCloseable {
     private val recorderLock = Any()
-    private var recorder: StreamRecorder? = null
+    private var recorder: AsyncRecorder<StreamRecorder>? = null
+    private var lastDropped = 0L
+    private val refused = AtomicLong()
 
     /** Whether a recorder is running. */
     val recording: Boolean get() = synchronized(recorderLock) { recorder != null }
 
+    /** Frames the running (or last) recording could not keep up with. */
+    val recordingDropped: Long get() = synchronized(recorderLock) { recorder?.framesDropped ?: lastDropped }
+
+    /** Frames the tracker refused for their timestamp ([Tracker.isRefusedTimestamp]), skipped. */
+    val refusedTimestamps: Long get() = refused.get()
+
     /**
-     * Records the frame (if recording) and pushes it to the tracker. Returns null when the
-     * tracker is already closed (a reset while a frame was in flight); other tracker
-     * errors are thrown.
+     * Pushes the frame to the tracker and records it (if recording). Returns null when
+     * the tracker is already closed (a reset while a frame was in flight) or refused the
+     * frame's timestamp (not after the previous frame's: a camera glitch, a clock jump);
+     * such a frame is skipped, counted in [refusedTimestamps] and not recorded, and the
+     * session goes on. Other tracker errors are thrown.
      */
     fun push(timestampNs: Long, depthMm: ShortArray, intensity: ByteArray): PushStatus? {
-        record(timestampNs, depthMm, intensity)
-        return try {
+        val status = try {
             tracker.pushFrame(timestampNs, depthMm, intensity)
         } catch (e: IllegalStateException) {
-            if (tracker.isClosed) null else throw e
+            if (tracker.isClosed) return null else throw e
+        } catch (e: IllegalArgumentException) {
+            if (!Tracker.isRefusedTimestamp(e)) throw e
+            refused.incrementAndGet()
+            return null
         }
+        // The tracker copied the frame; recording it afterwards keeps refused frames out.
+        synchronized(recorderLock) { recorder?.offer(timestampNs, depthMm, intensity) }
+        return status
     }
 
-    private fun record(timestampNs: Long, depthMm: ShortArray, intensity: ByteArray) {
-        val failed: String? = synchronized(recorderLock) {
-            val r = recorder ?: return
-            try {
-                r.writeFrame(timestampNs, depthMm, intensity)
-                null
-            } catch (e: Exception) {
-                // IOException (disk full, storage removed) or a frame the recorder refuses.
-                recorder = null
-                runCatching { r.close() }
-                "Recording stopped: ${e.message ?: e.javaClass.simpleName}. The ${r.framesWritten} frames before it are kept in ${r.dir.path}."
-            }
+    private fun onFailed(r: AsyncRecorder<StreamRecorder>, message: String) {
+        synchronized(recorderLock) {
+            if (recorder !== r) return
+            recorder = null
+            lastDropped = r.framesDropped
         }
-        if (failed != null) onRecordingFailed(failed)
+        onRecordingFailed(message)
     }
 
-    /** Starts recording into [recorder] (replacing and closing any previous one). */
-    fun startRecording(recorder: StreamRecorder) = synchronized(recorderLock) {
-        this.recorder?.let { runCatching { it.close() } }
-        this.recorder = recorder
+    /** Starts recording into [recorder] (replacing and finishing any previous one). */
+    fun startRecording(recorder: StreamRecorder) {
+        stopRecording()
+        val r = AsyncRecorder(recorder, recorderCapacity, ::onFailed)
+        synchronized(recorderLock) { this.recorder = r }
     }
 
-    /** Stops recording; returns the finished recorder (closed), or null if none was running. */
-    fun stopRecording(): StreamRecorder? = synchronized(recorderLock) {
-        val r = recorder
-        recorder = null
-        r?.close()
-        r
+    /**
+     * Stops recording: waits for the queued frames to be written, and returns the
+     * finished recorder (closed), or null if none was running.
+     */
+    fun stopRecording(): StreamRecorder? {
+        val r = synchronized(recorderLock) {
+            val r = recorder ?: return null
+            recorder = null
+            lastDropped = r.framesDropped
+            r
+        }
+        return r.finish()
     }
 
     override fun close() {

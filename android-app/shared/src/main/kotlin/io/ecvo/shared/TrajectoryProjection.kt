@@ -109,7 +109,28 @@ class TrajectoryProjector(
     var marginPx: Double = 32.0,
     /** Smallest extent shown, metres (so a still camera is not zoomed in on noise). */
     var minExtentM: Double = 0.5,
+    /**
+     * Gravity's opposite in world coordinates ([GravityAlignment.upInCamera] at the session's
+     * start), or null: the top view ([ProjectionPlane.XZ]) then looks down along it
+     * ([GravityPlane]) instead of along the first camera's y axis.
+     */
+    up: DoubleArray? = null,
 ) {
+    private var gravity: GravityPlane? = up?.let { GravityPlane(it) }
+
+    /** See the constructor; null for none. */
+    var up: DoubleArray? = up
+        set(v) {
+            field = v
+            gravity = v?.let { GravityPlane(it) }
+        }
+
+    /** Plane coordinates of a world point (or direction) in the current view. */
+    private fun onPlane(x: Double, y: Double, z: Double): Pair<Double, Double> {
+        val g = gravity
+        return if (plane == ProjectionPlane.XZ && g != null) g.project(x, y, z) else plane.project(x, y, z)
+    }
+
     /**
      * Projects [trajectory], [references] and the current pose [current] (a 4x4
      * column-major camera-to-world matrix as `Tracker.getPose` writes it, or null) into a
@@ -131,19 +152,19 @@ class TrajectoryProjector(
             minR = min(minR, r); maxR = max(maxR, r); minU = min(minU, u); maxU = max(maxU, u)
         }
         for ((i, p) in trajectory.withIndex()) {
-            val (r, u) = plane.project(p.tx, p.ty, p.tz)
+            val (r, u) = onPlane(p.tx, p.ty, p.tz)
             pr[i] = r; pu[i] = u
             include(r, u)
         }
-        val refs = references.map { plane.project(it.pose.tx, it.pose.ty, it.pose.tz) }
+        val refs = references.map { onPlane(it.pose.tx, it.pose.ty, it.pose.tz) }
         refs.forEach { include(it.first, it.second) }
         var cur: Pair<Double, Double>? = null
         var fwd: Pair<Double, Double>? = null
         if (current != null) {
             require(current.size >= 16) { "pose matrix needs 16 floats, got ${current.size}" }
-            cur = plane.project(current[12].toDouble(), current[13].toDouble(), current[14].toDouble())
+            cur = onPlane(current[12].toDouble(), current[13].toDouble(), current[14].toDouble())
             // Column 2: the camera's forward (z) axis in the world.
-            fwd = plane.project(current[8].toDouble(), current[9].toDouble(), current[10].toDouble())
+            fwd = onPlane(current[8].toDouble(), current[9].toDouble(), current[10].toDouble())
             include(cur.first, cur.second)
         }
         val t = ViewTransform.fit(minR, maxR, minU, maxU, viewWidth, viewHeight, marginPx, minExtentM)

@@ -99,5 +99,12 @@ class CameraGeometryTest {
         val yuv = listOf(StreamSize(1920, 1080), StreamSize(640, 480), StreamSize(800, 600), StreamSize(320, 240))
         assertEquals(StreamSize(640, 480), StreamSizes.colour(yuv, StreamSize(240, 180), 320))
         assertEquals(StreamSize(1920, 1080), StreamSizes.colour(yuv, StreamSize(640, 360), 320))
+        // Native resolution: the largest size up to VGA, never cropped to 16:9.
+        assertEquals(StreamSize(640, 480), StreamSizes.nativeDepth(sizes))
+        assertEquals(StreamSize(240, 180), StreamSizes.nativeDepth(listOf(StreamSize(240, 180), StreamSize(160, 120))))
+        assertEquals(StreamSize(1280, 720), StreamSizes.nativeDepth(listOf(StreamSize(1280, 720), StreamSize(1920, 1080))))
+        assertNull(StreamSizes.nativeDepth(emptyList()))
+        // A 240x180 stream's intensity: 4:3, at least twice as wide.
+        assertEquals(StreamSize(640, 480), StreamSizes.colour(yuv, StreamSize(240, 180), 240))
     }
 }

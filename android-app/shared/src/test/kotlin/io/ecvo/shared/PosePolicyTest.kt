@@ -70,4 +70,33 @@ class PosePolicyTest {
         assertEquals(PoseReference.UNDEFINED, PoseReference.fromCode(42))
         assertEquals(PoseReference.GYROSCOPE, PoseReference.fromCode(1))
     }
+
+    @Test
+    fun theFallbackTurnsTheImagesBySensorOrientation() {
+        val none = CameraPose(null, null, PoseReference.PRIMARY_CAMERA)
+        // Both mounted at 90°: still the identity, and the note says "axes".
+        val same = PosePolicy.decide(none, none, colourIsPrimary = true, depthOrientation = 90, colourOrientation = 90)
+        assertEquals(RigidTransform.IDENTITY.rotation.toList(), same.depthToColour.rotation.toList())
+        assertTrue(same.note!!, same.note.contains("centre and axes"))
+        // Depth sensor at 90°, colour at 0°: the depth image's right (+x) is the colour image's down (+y).
+        val p = PosePolicy.decide(none, none, colourIsPrimary = true, depthOrientation = 90, colourOrientation = 0)
+        assertFalse(p.fromLensPoses)
+        val r = p.depthToColour.rotation
+        val right = doubleArrayOf(r[0], r[3], r[6]) // R * (1, 0, 0)
+        assertEquals(listOf(0.0, 1.0, 0.0), right.toList())
+        assertEquals(1.0, r[8], 0.0) // the optical axis is kept
+        assertTrue(p.note!!, p.note.contains("turned 90° apart"))
+        // 270° against 90°: half a turn (an upside-down mount).
+        val half = PosePolicy.orientationFallback(270, 90).rotation
+        assertEquals(listOf(-1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0), half.toList())
+        // Registration with a half turn maps a depth pixel's point to the point mirrored
+        // through the principal point in the colour image.
+        val cam = CameraIntrinsics(40, 30, 30.0, 30.0, 19.5, 14.5)
+        val reg = IntensityRegistration(cam, cam, PosePolicy.orientationFallback(180, 0))
+        val depth = ShortArray(40 * 30) { 1000 }
+        val gray = ByteArray(40 * 30) { i -> (i % 40 * 6).toByte() } // brightness grows to the right
+        val out = reg.register(depth, GrayPlane(gray, 40, 30))
+        val row = 15 * 40
+        assertTrue("left of the depth image sees the bright right of the colour image", (out[row + 2].toInt() and 0xFF) > (out[row + 37].toInt() and 0xFF))
+    }
 }

@@ -21,10 +21,15 @@ import org.junit.Test
 class FakeTracker(private val window: Int = Int.MAX_VALUE, private val statuses: (Int) -> PushStatus = { PushStatus.ACCEPTED }) : PoseTracker {
     val pushed = ArrayList<Long>()
     var failWith: RuntimeException? = null
+    /** Refuses a timestamp not after the previous accepted one, with the native side's message. */
+    var refuseOldTimestamps = false
     @Volatile private var closed = false
     override fun pushFrame(timestampNs: Long, depth: ShortArray, intensity: ByteArray): PushStatus {
         check(!closed) { "Tracker is closed" }
         failWith?.let { throw it }
+        if (refuseOldTimestamps && pushed.isNotEmpty() && timestampNs <= pushed.last()) {
+            throw IllegalArgumentException("timestamp ${timestampNs / 1e9} is not after the previous frame's (${pushed.last() / 1e9})")
+        }
         pushed += timestampNs
         return statuses(pushed.size - 1)
     }
@@ -75,16 +80,23 @@ class SessionTest {
     @Test
     fun aRecorderThatFailsStopsRecordingWithAMessageAndTrackingGoesOn() {
         val fake = FakeTracker()
-        val messages = ArrayList<String>()
+        val messages = java.util.Collections.synchronizedList(ArrayList<String>())
         val dir = File(TestSupport.tempDir(), "rec")
         val s = TrackingSession(fake) { messages += it }
         s.startRecording(StreamRecorder(dir, cam))
         s.push(1_000_000L, depth, gray)
+        // Written on the recorder's thread: wait for it.
+        val written = System.nanoTime() + 5_000_000_000L
+        while (File(dir, "rgb.txt").readLines().none { !it.startsWith("#") } && System.nanoTime() < written) Thread.sleep(5)
         // The disk "fills": the depth folder becomes a file, so the next PNG cannot be written.
         File(dir, "depth").deleteRecursively()
         File(dir, "depth").writeText("not a folder")
         assertEquals(PushStatus.ACCEPTED, s.push(2_000_000L, depth, gray))
         assertEquals(PushStatus.ACCEPTED, s.push(3_000_000L, depth, gray))
+        // The recorder runs on its own thread: the failure arrives there.
+        val deadline = System.nanoTime() + 5_000_000_000L
+        while (s.recording && System.nanoTime() < deadline) Thread.sleep(5)
+        Thread.sleep(30)
         assertFalse(s.recording)
         assertEquals(1, messages.size)
         assertTrue(messages[0], messages[0].startsWith("Recording stopped") && messages[0].contains("1 frames"))
@@ -157,6 +169,44 @@ class SessionTest {
         assertEquals(1, src.stopped)
         assertEquals(StatusKind.ERROR, c.presenter.status.kind)
         assertTrue(c.presenter.status.message!!.contains("stage panicked"))
+    }
+
+    @Test
+    fun aRefusedTimestampSkipsTheFrameAndTheSessionGoesOn() {
+        val fake = FakeTracker().apply { refuseOldTimestamps = true }
+        val c = controller(tracker = { fake })
+        val src = Source()
+        lateinit var cb: SourceCallbacks
+        assertTrue(c.start(FrameSource.LIVE, config) { cb = it; src })
+        val dir = File(TestSupport.tempDir(), "rec")
+        assertTrue(c.startRecording { StreamRecorder(dir, it) })
+        for (ts in longArrayOf(10_000_000, 20_000_000, 20_000_000, 15_000_000, 30_000_000)) cb.frame(ts, depth, gray)
+        c.poll(FloatArray(16))
+        assertEquals(0, src.stopped)
+        assertEquals(FrameSource.LIVE, c.running)
+        assertTrue(c.presenter.status.kind != StatusKind.ERROR)
+        assertEquals(listOf(10_000_000L, 20_000_000L, 30_000_000L), fake.pushed)
+        assertEquals(2L, c.session!!.refusedTimestamps)
+        assertTrue(c.presenter.status.frames, c.presenter.status.frames.contains("2 bad timestamps skipped"))
+        // The refused frames are not recorded either (the recording stays a valid stream).
+        c.stopSource()
+        assertEquals(3, StreamReader(DirectoryFiles(dir)).frames.size)
+    }
+
+    @Test
+    fun otherBadInputStaysFatal() {
+        val fake = FakeTracker()
+        val c = controller(tracker = { fake })
+        val src = Source()
+        lateinit var cb: SourceCallbacks
+        assertTrue(c.start(FrameSource.LIVE, config) { cb = it; src })
+        fake.failWith = IllegalArgumentException("depth: 63 values, expected 64")
+        cb.frame(1, depth, gray)
+        assertEquals(1, src.stopped)
+        assertEquals(StatusKind.ERROR, c.presenter.status.kind)
+        assertTrue(c.presenter.status.message!!.contains("63 values"))
+        assertFalse(Tracker.isRefusedTimestamp(IllegalStateException("timestamp 1 is not after the previous frame's (2)")))
+        assertTrue(Tracker.isRefusedTimestamp(IllegalArgumentException("timestamp 1 is not after the previous frame's (2)")))
     }
 
     @Test
