@@ -243,6 +243,7 @@ impl Pipeline {
             last_input: Mutex::new(LastInput {
                 camera: config.camera,
                 timestamp: None,
+                timestamp_ns: None,
                 hash: None,
             }),
             // Raw buffers are created now too, for the same reason as the frame pool.
@@ -412,6 +413,28 @@ impl Pipeline {
         timestamp: f64,
         fill: impl FnOnce(&mut [u8], &mut [u16]),
     ) -> Result<PushStatus> {
+        self.push_stamped(timestamp, None, fill)
+    }
+
+    /// [`Pipeline::push`] with the timestamp in integer nanoseconds, as cameras give
+    /// it (Android's `Image.getTimestamp`): the order check compares the integers
+    /// ([`Error::TimestampNsNotIncreasing`], in nanoseconds), so two frames 1 ns apart
+    /// are told apart at any magnitude, where their seconds as `f64` may be equal
+    /// (above 2^53 ns, about 104 days). The engine gets `ns / 1e9` seconds.
+    pub fn push_ns(
+        &self,
+        timestamp_ns: i64,
+        fill: impl FnOnce(&mut [u8], &mut [u16]),
+    ) -> Result<PushStatus> {
+        self.push_stamped(timestamp_ns as f64 / 1e9, Some(timestamp_ns), fill)
+    }
+
+    fn push_stamped(
+        &self,
+        timestamp: f64,
+        timestamp_ns: Option<i64>,
+        fill: impl FnOnce(&mut [u8], &mut [u16]),
+    ) -> Result<PushStatus> {
         let pushed_at = Instant::now();
         let s = &*self.shared;
         if !timestamp.is_finite() {
@@ -423,7 +446,7 @@ impl Pipeline {
         if s.aborted() || s.input_closed.load(Ordering::Acquire) {
             return Err(s.stopped_error());
         }
-        s.check_timestamp(&lock(&s.last_input), timestamp)?;
+        s.check_timestamp(&lock(&s.last_input), timestamp, timestamp_ns)?;
         let raw = s.take_raw()?;
         let mut guard = RawGuard {
             shared: s,
@@ -440,11 +463,12 @@ impl Pipeline {
         {
             // Checked again: another thread may have pushed meanwhile.
             let mut last = lock(&s.last_input);
-            s.check_timestamp(&last, timestamp)?;
+            s.check_timestamp(&last, timestamp, timestamp_ns)?;
             // A frame without any depth (a covered lens) goes to the tracker, which
             // flags it lost, however often it comes.
             let repeated = !blank && last.hash == Some(hash);
             last.timestamp = Some(timestamp);
+            last.timestamp_ns = timestamp_ns;
             last.hash = Some(hash);
             if repeated {
                 drop(last);
