@@ -116,7 +116,7 @@ fn native_init<'local>(
 
 /// Pushes one frame read from two direct buffers laid out as given.
 fn push_direct(
-    env: &Env<'_>,
+    env: &mut Env<'_>,
     handle: jlong,
     timestamp_ns: jlong,
     depth: &JByteBuffer<'_>,

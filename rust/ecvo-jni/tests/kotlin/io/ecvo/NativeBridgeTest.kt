@@ -125,7 +125,7 @@ class NativeBridgeTest {
         Tracker(config(s)).use { t ->
             for (i in s.stamps.indices) {
                 d.clear(); d.asShortBuffer().put(s.depth[i])
-                g.clear(); g.put(s.intensity[i])
+                g.clear(); g.put(s.intensity[i]).rewind() // the frame lies from position() to limit()
                 // The caller may scribble over its buffers once pushFrame returns.
                 assertEquals(PushStatus.ACCEPTED, t.pushFrame(s.stamps[i], d, g))
                 g.clear(); while (g.hasRemaining()) g.put(0x55)
