@@ -7,7 +7,7 @@
 //!
 //! ## The native methods
 //!
-//! The 13 `@JvmStatic external fun` of `NativeBridge.kt` are declared once each with
+//! The 15 `@JvmStatic external fun` of `NativeBridge.kt` are declared once each with
 //! jni 0.22's `native_method!` (see [`NATIVE_METHODS`]): the macro checks at compile
 //! time that each Rust implementation matches the JNI signature written next to it,
 //! and exports it under its short JNI name (`Java_io_ecvo_NativeBridge_nativeInit`,
@@ -73,11 +73,13 @@ mod config;
 mod depth16;
 mod error;
 mod frames;
+#[doc(hidden)]
+pub mod handles;
 mod layout;
 mod natives;
 mod tracker;
 
-pub use config::InitArgs;
+pub use config::{InitArgs, memory_budget, set_memory_budget};
 pub use depth16::*;
 pub use error::Failure;
 pub use frames::{PlaneLayout, copy_plane};

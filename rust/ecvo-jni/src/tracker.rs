@@ -12,7 +12,7 @@ use crate::depth16::Depth16Decoder;
 use crate::error::Failure;
 #[cfg(feature = "test-hooks")]
 use crate::layout::TEST_PANIC_TIMESTAMP_NS;
-use crate::layout::{DepthFormat, ns_to_seconds};
+use crate::layout::{DepthFormat, NO_POSE, ns_to_seconds};
 
 /// One tracker behind a handle.
 pub struct NativeTracker {
@@ -87,7 +87,13 @@ impl NativeTracker {
         let seconds = ns_to_seconds(timestamp_ns);
         let mut result = Ok(());
         let format = self.format;
-        let status = self.pipeline.push(seconds, |i, d| {
+        // Compared with the previous frame's as integer nanoseconds.
+        let status = self.pipeline.push_ns(timestamp_ns, |i, d| {
+        if timestamp_ns == NO_POSE {
+            return Err(Failure::IllegalArgument(format!(
+                "timestampNs: {timestamp_ns} (Long.MIN_VALUE) is NO_POSE, the \"no pose yet\" of getPose, not a timestamp"
+            )));
+        }
             result = fill(i, d);
             if result.is_err() {
                 // The buffer must be overwritten entirely whatever happens.
