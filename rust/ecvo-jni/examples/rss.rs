@@ -8,7 +8,7 @@
 //! done
 //! ```
 //!
-//! Prints the size, `nativeMemoryNeeded`, whether init accepted it under the default
+//! A third argument sets the budget in MB (e.g. `1280 720 2048`). Prints the size, `nativeMemoryNeeded`, whether init accepted it under the default
 //! budget, the peak RSS (`VmHWM`) after two frames and the RSS after release. The
 //! allocator is the process's: glibc malloc on a Linux host.
 
@@ -29,6 +29,10 @@ fn main() {
         .skip(1)
         .map(|v| v.parse::<i32>().expect("WIDTH HEIGHT"));
     let (w, h) = (a.next().expect("WIDTH"), a.next().expect("HEIGHT"));
+    // An optional third argument: the budget in MB (`nativeSetMemoryBudget`).
+    if let Some(mb) = a.next() {
+        ecvo_jni::set_memory_budget(i64::from(mb) << 20).expect("a positive budget");
+    }
     let f = 0.8 * w.max(h) as f64;
     let args = InitArgs {
         width: w,
