@@ -76,6 +76,7 @@ mod frames;
 #[doc(hidden)]
 pub mod handles;
 mod layout;
+mod limits;
 mod natives;
 mod tracker;
 
@@ -84,6 +85,7 @@ pub use depth16::*;
 pub use error::Failure;
 pub use frames::{PlaneLayout, copy_plane};
 pub use layout::*;
+pub use limits::MAX_LIVE_TRACKERS;
 pub use natives::*;
 pub use tracker::NativeTracker;
 

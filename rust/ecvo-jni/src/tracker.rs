@@ -24,6 +24,8 @@ pub struct NativeTracker {
     /// Recent (seconds bits, nanoseconds) pairs, so that `nativeGetPose` returns the
     /// exact nanosecond timestamp that was pushed.
     stamps: Mutex<VecDeque<(u64, jlong)>>,
+    /// Its place under [`crate::limits::MAX_LIVE_TRACKERS`], given back when it drops.
+    _slot: crate::limits::Slot,
 }
 
 /// Pushed timestamps remembered for `nativeGetPose` (far more than the frames the
@@ -50,6 +52,7 @@ pub(crate) fn tracker(handle: jlong) -> Result<Arc<NativeTracker>, Failure> {
 pub(crate) fn init(args: &InitArgs) -> Result<jlong, Failure> {
     let (config, options, format, confidence) = args.build()?;
     let (width, height) = (config.camera.width, config.camera.height);
+    let slot = crate::limits::reserve()?;
     let pipeline = Pipeline::new(config, options)?;
     let t = Arc::new(NativeTracker {
         pipeline,
@@ -58,6 +61,7 @@ pub(crate) fn init(args: &InitArgs) -> Result<jlong, Failure> {
         format,
         depth16: Depth16Decoder::new(confidence),
         stamps: Mutex::new(VecDeque::with_capacity(STAMPS_KEPT)),
+        _slot: slot,
     });
     let handle = NEXT_HANDLE.fetch_add(1, Ordering::Relaxed);
     lock(&REGISTRY).insert(handle, t);
