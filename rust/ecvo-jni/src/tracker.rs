@@ -88,16 +88,16 @@ impl NativeTracker {
         if timestamp_ns == TEST_PANIC_TIMESTAMP_NS {
             panic!("ecvo-jni test hook: injected panic");
         }
-        let seconds = ns_to_seconds(timestamp_ns);
-        let mut result = Ok(());
-        let format = self.format;
-        // Compared with the previous frame's as integer nanoseconds.
-        let status = self.pipeline.push_ns(timestamp_ns, |i, d| {
         if timestamp_ns == NO_POSE {
             return Err(Failure::IllegalArgument(format!(
                 "timestampNs: {timestamp_ns} (Long.MIN_VALUE) is NO_POSE, the \"no pose yet\" of getPose, not a timestamp"
             )));
         }
+        let seconds = ns_to_seconds(timestamp_ns);
+        let mut result = Ok(());
+        let format = self.format;
+        // Compared with the previous frame's as integer nanoseconds.
+        let status = self.pipeline.push_ns(timestamp_ns, |i, d| {
             result = fill(i, d);
             if result.is_err() {
                 // The buffer must be overwritten entirely whatever happens.
