@@ -51,6 +51,11 @@ interface PoseTracker : AutoCloseable {
  * }
  * ```
  *
+ * A process holds at most 16 live trackers (`MAX_LIVE_TRACKERS` in `libecvo_jni`); the
+ * next one throws IllegalStateException until one is closed. `init` computes the
+ * tracker's memory first and refuses above the budget (default 512 MiB,
+ * `NativeBridge.nativeSetMemoryBudget`; ask with `NativeBridge.nativeMemoryNeeded`).
+ *
  * Frames are copied before `pushFrame` returns, so the caller may reuse its buffers at
  * once. Methods may be called from several threads (a camera thread pushing, the UI
  * thread reading the pose); [close] waits for calls in progress and then releases the
@@ -114,8 +119,13 @@ class Tracker(val config: TrackerConfig) : PoseTracker {
 
     /**
      * Pushes one frame from direct buffers: [depth] holds `width * height` 16-bit samples
-     * in native byte order in the config's [DepthFormat], [intensity] `width * height`
-     * 8-bit gray values, both row-major without padding, read from position 0.
+     * in the config's [DepthFormat], little-endian (`order(ByteOrder.LITTLE_ENDIAN)`;
+     * `ImageReader` planes already are; a big-endian depth buffer is an
+     * IllegalArgumentException), [intensity] `width * height` 8-bit gray values, both
+     * row-major without padding. Each buffer is read from its `position()` up to its
+     * `limit()`, which must hold the whole frame. Frames must come from memory the caller
+     * owns: a direct buffer over a memory-mapped file that is truncated while it is read
+     * makes the copy fault (SIGBUS), which no JNI code can catch.
      * [timestampNs] is the capture time (e.g. `Image.getTimestamp()`), increasing: a
      * timestamp not after the previous frame's is an IllegalArgumentException (the frame is
      * not tracked; later frames are). A frame bit-identical to the previous one is
