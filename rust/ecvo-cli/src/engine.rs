@@ -69,6 +69,38 @@ pub struct EngineOptions {
     pub cloud: CloudFrames,
     /// Take every `cloud_stride`-th pixel in each direction for the cloud.
     pub cloud_stride: usize,
+    /// Make a skipped frame (repeated, or its timestamp not after the previous one)
+    /// an error instead of a warning.
+    pub strict: bool,
+}
+
+/// Frames of the stream that were read but not tracked, or tracked without depth.
+#[derive(Clone, Debug, Default)]
+pub struct Skips {
+    /// Frames bit-identical to the previous one (positions in the stream).
+    pub repeated: Vec<usize>,
+    /// Frames whose timestamp was not after the previous frame's.
+    pub timestamp_not_increasing: Vec<usize>,
+    /// Frames with no depth pixel in the filter's range (tracked, but lost unless
+    /// the tracker can register them on intensity alone, which it does not).
+    pub no_valid_depth: Vec<usize>,
+}
+
+/// The stream frames checked for valid depth with an immediate warning.
+const EARLY_DEPTH_FRAMES: usize = 5;
+
+/// Raw depth values that the filter stage keeps: non-zero and within the filter's
+/// depth range at the camera's depth scale.
+fn valid_raw_depth(config: &Config) -> (u16, u16) {
+    let s = config.camera.depth_scale;
+    let lo = (config.filter.min_depth_m * s).ceil().max(1.0);
+    let hi = (config.filter.max_depth_m * s)
+        .floor()
+        .min(f64::from(u16::MAX));
+    if !(lo <= hi) {
+        return (1, 0);
+    }
+    (lo as u16, hi as u16)
 }
 
 /// Points of one frame in its camera's coordinates, as [`PreparedFrame::for_each_point`]
@@ -105,6 +137,8 @@ pub struct TrackRun {
     pub wall_s: f64,
     /// Compute threads the pipeline used.
     pub threads: usize,
+    /// Frames not tracked, or tracked without depth.
+    pub skips: Skips,
 }
 
 /// The calling thread's side of a run: frames waiting for their output, and what
@@ -218,23 +252,52 @@ pub fn track_sequence(
         cloud_ms: Vec::new(),
         bar: &bar,
     };
+    let mut skips = Skips::default();
+    let (lo, hi) = valid_raw_depth(config);
+    let mut warned_depth = false;
     let mut reader = sequence.reader(Some(n), PREFETCH);
     // Not a `for` loop: the reader is also used inside to recycle frames.
     #[allow(clippy::while_let_on_iterator)]
     while let Some(item) = reader.next() {
         let frame = item.with_context(|| format!("reading {}", sequence.dir().display()))?;
         let what = || format!("frame {} (timestamp {})", frame.index, frame.timestamp);
+        if !frame.depth.iter().any(|&d| d >= lo && d <= hi) {
+            skips.no_valid_depth.push(frame.index);
+            if frame.index < EARLY_DEPTH_FRAMES && !warned_depth {
+                warned_depth = true;
+                let c = &config.camera;
+                log::warn!(
+                    "{}: no valid depth pixel (every raw value is 0 or outside {}..={}, which \
+                     is {} to {} m at depth_scale {}); without depth the frames are lost: is \
+                     depth_scale right?",
+                    what(),
+                    lo,
+                    hi,
+                    config.filter.min_depth_m,
+                    config.filter.max_depth_m,
+                    c.depth_scale
+                );
+            }
+        }
         match pipeline.push_view(frame.view()) {
             Ok(PushStatus::Repeated) => {
                 // Bit-identical to the previous frame: not tracked (counted in the
                 // pipeline's statistics).
+                if opts.strict {
+                    bail!("{}: identical to the previous frame (--strict)", what());
+                }
                 log::warn!("{}: identical to the previous frame, skipped", what());
+                skips.repeated.push(frame.index);
                 reader.recycle(frame);
                 continue;
             }
             Ok(_) => {}
             Err(e @ ecvo_pipeline::Error::TimestampNotIncreasing { .. }) => {
+                if opts.strict {
+                    bail!("{}: {e} (--strict)", what());
+                }
                 log::warn!("{}: {e}; skipped", what());
+                skips.timestamp_not_increasing.push(frame.index);
                 reader.recycle(frame);
                 continue;
             }
@@ -279,6 +342,7 @@ pub fn track_sequence(
         clouds: c.clouds,
         wall_s: start.elapsed().as_secs_f64(),
         threads: opts.threads,
+        skips,
     })
 }
 
