@@ -2,6 +2,28 @@
 
 use crate::error::{Error, Result};
 
+/// The smallest image side [`Camera::validate`] accepts, in pixels. The pyramid
+/// schedules use fewer levels on small images ([`crate::Schedule::levels_for`]), so
+/// every size from `MIN_SIDE x MIN_SIDE` up runs (though an image this small has too
+/// few pixels to track: [`crate::MotionConfig::min_valid_pixels`]).
+pub const MIN_SIDE: usize = 8;
+/// The largest image side [`Camera::validate`] accepts, in pixels.
+pub const MAX_SIDE: usize = 8192;
+/// The smallest focal length [`Camera::validate`] accepts, as a fraction of the larger
+/// image side.
+pub const MIN_FOCAL_PER_SIDE: f64 = 0.05;
+/// The largest focal length [`Camera::validate`] accepts, as a multiple of the larger
+/// image side.
+pub const MAX_FOCAL_PER_SIDE: f64 = 50.0;
+/// How far outside the image [`Camera::validate`] lets the principal point lie, as a
+/// fraction of the image side along that axis.
+pub const PRINCIPAL_POINT_MARGIN: f64 = 0.1;
+/// The smallest `depth_scale` [`Camera::validate`] accepts: raw units per metre
+/// (1: depth in metres).
+pub const MIN_DEPTH_SCALE: f64 = 1.0;
+/// The largest `depth_scale` [`Camera::validate`] accepts (1e6: micrometres).
+pub const MAX_DEPTH_SCALE: f64 = 1e6;
+
 /// Pinhole camera of an RGB-D stream whose intensity is registered to its depth.
 ///
 /// `fy` may be negative (ICL-NUIM stores its images with the y axis flipped).
@@ -42,38 +64,88 @@ impl Camera {
         Ok(())
     }
 
-    /// Checks that every field is finite and usable; the error names the field.
+    /// Checks that every field is finite and plausible for the image size; the error
+    /// names the field and its value. The one intrinsics check of ecvo: the command
+    /// line, the JNI library and `set_intrinsics` all go through it.
+    ///
+    /// - `width`, `height`: [`MIN_SIDE`]`..=`[`MAX_SIDE`] pixels.
+    /// - `fx`: positive (a negative `fx` would mirror the motion along x without any
+    ///   sign of it in the residuals), and `fy` non-zero (it may be negative: ICL-NUIM
+    ///   stores its images with the y axis flipped); both with `|f|` between
+    ///   [`MIN_FOCAL_PER_SIDE`] and [`MAX_FOCAL_PER_SIDE`] times the larger image side
+    ///   (a 170-degree fisheye has about 0.09, a 10x telephoto on a phone about 8).
+    /// - `cx`, `cy`: within [`PRINCIPAL_POINT_MARGIN`] of the image side outside the
+    ///   image (pixel centres at `0..width-1`).
+    /// - `depth_scale`: [`MIN_DEPTH_SCALE`]`..=`[`MAX_DEPTH_SCALE`] raw units per metre
+    ///   (1 for metres, 1000 for millimetres, 5000 for TUM, 1e6 for micrometres).
     pub fn validate(&self) -> Result<()> {
         let bad = |field: &'static str, why: String| Err(Error::InvalidConfig { field, why });
-        if self.width < 8 || self.height < 8 {
+        if self.width < MIN_SIDE || self.height < MIN_SIDE {
             return bad(
                 "width/height",
-                format!("{}x{} is smaller than 8x8", self.width, self.height),
+                format!(
+                    "{}x{} is smaller than {MIN_SIDE}x{MIN_SIDE}",
+                    self.width, self.height
+                ),
             );
         }
-        if self.width > 8192 || self.height > 8192 {
+        if self.width > MAX_SIDE || self.height > MAX_SIDE {
             return bad(
                 "width/height",
-                format!("{}x{} is larger than 8192x8192", self.width, self.height),
+                format!(
+                    "{}x{} is larger than {MAX_SIDE}x{MAX_SIDE}",
+                    self.width, self.height
+                ),
             );
         }
+        let side = self.width.max(self.height) as f64;
+        let (lo, hi) = (MIN_FOCAL_PER_SIDE * side, MAX_FOCAL_PER_SIDE * side);
         for (field, v) in [("fx", self.fx), ("fy", self.fy)] {
-            if !v.is_finite() || v.abs() < 1e-6 {
+            if !v.is_finite() || v == 0.0 {
                 return bad(
                     field,
                     format!("focal length must be finite and non-zero, got {v}"),
                 );
             }
-        }
-        for (field, v) in [("cx", self.cx), ("cy", self.cy)] {
-            if !v.is_finite() {
-                return bad(field, format!("principal point must be finite, got {v}"));
+            if !(lo..=hi).contains(&v.abs()) {
+                return bad(
+                    field,
+                    format!(
+                        "focal length {v} px is implausible for a {}x{} image: |{field}| must be in [{lo}, {hi}] ({MIN_FOCAL_PER_SIDE} to {MAX_FOCAL_PER_SIDE} times the larger side)",
+                        self.width, self.height
+                    ),
+                );
             }
         }
-        if !self.depth_scale.is_finite() || self.depth_scale <= 0.0 {
+        if self.fx < 0.0 {
+            return bad(
+                "fx",
+                format!(
+                    "{} is negative: it would mirror the motion along x; flip the image instead",
+                    self.fx
+                ),
+            );
+        }
+        for (field, v, n) in [("cx", self.cx, self.width), ("cy", self.cy, self.height)] {
+            let margin = PRINCIPAL_POINT_MARGIN * n as f64;
+            let (lo, hi) = (-0.5 - margin, n as f64 - 0.5 + margin);
+            if !v.is_finite() || !(lo..=hi).contains(&v) {
+                return bad(
+                    field,
+                    format!(
+                        "principal point {v} is outside the {}x{} image (allowed [{lo}, {hi}])",
+                        self.width, self.height
+                    ),
+                );
+            }
+        }
+        if !(MIN_DEPTH_SCALE..=MAX_DEPTH_SCALE).contains(&self.depth_scale) {
             return bad(
                 "depth_scale",
-                format!("must be finite and positive, got {}", self.depth_scale),
+                format!(
+                    "{} raw units per metre is not in [{MIN_DEPTH_SCALE}, {MAX_DEPTH_SCALE}] (1000 for millimetres, 5000 for TUM)",
+                    self.depth_scale
+                ),
             );
         }
         Ok(())
@@ -206,6 +278,43 @@ mod tests {
         let mut c = cam();
         c.fy = -481.2; // ICL-NUIM
         assert!(c.validate().is_ok());
+        for (field, f) in [
+            ("fx", (|c: &mut Camera| c.fx = -258.65) as fn(&mut Camera)),
+            ("fx", |c| c.fx = 1e-5),
+            ("fx", |c| c.fx = 1e300),
+            ("fy", |c| c.fy = 20_000.0),
+            ("cx", |c| c.cx = 1e9),
+            ("cx", |c| c.cx = -1e9),
+            ("cy", |c| c.cy = 300.0),
+            ("cy", |c| c.cy = f64::INFINITY),
+            ("depth_scale", |c| c.depth_scale = 4.9e-324),
+            ("depth_scale", |c| c.depth_scale = 1e-300),
+            ("depth_scale", |c| c.depth_scale = 2e6),
+            ("depth_scale", |c| c.depth_scale = f64::NAN),
+        ] {
+            let mut c = cam();
+            f(&mut c);
+            match c.validate() {
+                Err(e @ Error::InvalidConfig { field: got, .. }) => {
+                    assert_eq!(got, field, "{c:?}: {e}");
+                }
+                other => panic!("{c:?} gave {other:?}, expected an error on {field}"),
+            }
+        }
+        // The limits themselves are accepted: a wide fisheye, a long telephoto, a
+        // principal point a little outside the image, depth in metres.
+        for f in [
+            (|c: &mut Camera| c.fx = 0.05 * 320.0) as fn(&mut Camera),
+            |c| c.fy = -50.0 * 320.0,
+            |c| c.cx = -0.5 - 32.0,
+            |c| c.cy = 239.5 + 24.0,
+            |c| c.depth_scale = 1.0,
+            |c| c.depth_scale = 1e6,
+        ] {
+            let mut c = cam();
+            f(&mut c);
+            assert!(c.validate().is_ok(), "{c:?}: {:?}", c.validate());
+        }
         let mut c = cam();
         c.depth_scale = 0.0;
         assert!(matches!(

@@ -5,8 +5,8 @@ use crate::error::{Error, Result};
 
 mod schedule;
 pub use schedule::{
-    MAX_SCHEDULE_SHIFT, MIN_POINT_BUDGET, MotionLevel, SCHEDULE_SHIFT_SIDE, Schedule,
-    parse_point_budget, parse_schedule,
+    MAX_PYRAMID_LEVEL, MAX_SCHEDULE_SHIFT, MIN_LEVEL_SIDE, MIN_POINT_BUDGET, MotionLevel,
+    SCHEDULE_SHIFT_SIDE, Schedule, parse_point_budget, parse_schedule,
 };
 
 /// Motion thresholds `(εd, εa)` of one error-correction level: `comp()` asks for a
@@ -293,6 +293,11 @@ pub struct Config {
     /// ... and at least this fraction carrying intensity texture (gradient above
     /// [`crate::prepare::TEXTURE_GRADIENT`]) where there is depth.
     pub min_anchor_texture_fraction: f64,
+    /// The most bytes the engine may allocate ([`crate::memory`]): the sequential
+    /// engine and the pipeline refuse, at creation and before allocating, a size and
+    /// settings that need more ([`crate::Error::MemoryBudget`]).
+    /// [`crate::DEFAULT_MEMORY_BUDGET`] (512 MiB) by default.
+    pub memory_budget: usize,
 }
 
 impl Config {
@@ -360,6 +365,7 @@ impl Config {
             refine_every: 3,
             min_anchor_depth_fraction: 0.05,
             min_anchor_texture_fraction: 0.02,
+            memory_budget: crate::memory::DEFAULT_MEMORY_BUDGET,
         }
     }
 
@@ -447,17 +453,16 @@ impl Config {
         if m.levels.is_empty() {
             return bad("motion.levels", "no coarse-to-fine level".into());
         }
-        let mut w = self.camera.width;
-        let mut h = self.camera.height;
         let deepest = m.levels.iter().map(|l| l.pyramid_level).max().unwrap_or(0);
-        for _ in 0..deepest {
-            w /= 2;
-            h /= 2;
-        }
-        if deepest > 6 || w < 8 || h < 8 {
+        let allowed = Schedule::max_level_for(&self.camera);
+        if deepest > allowed {
+            let (w, h) = (self.camera.width >> deepest, self.camera.height >> deepest);
             return bad(
                 "motion.levels",
-                format!("pyramid level {deepest} leaves a {w}x{h} image"),
+                format!(
+                    "the schedule uses pyramid level {deepest}, which is {w}x{h} for a {}x{} image; this size allows levels 0..={allowed} (each at least {MIN_LEVEL_SIDE}x{MIN_LEVEL_SIDE}, at most level {MAX_PYRAMID_LEVEL})",
+                    self.camera.width, self.camera.height
+                ),
             );
         }
         for l in &m.levels {
@@ -568,6 +573,9 @@ impl Config {
             if !(0.0..=1.0).contains(&v) {
                 return bad(field, format!("{v} is not a fraction in [0, 1]"));
             }
+        }
+        if self.memory_budget == 0 {
+            return bad("memory_budget", "0 bytes is no budget".into());
         }
         for l in &self.reference_levels {
             if !(l.max_distance_m >= 0.0 && l.max_distance_m.is_finite()) {

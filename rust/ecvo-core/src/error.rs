@@ -12,6 +12,19 @@ pub enum Error {
         /// Why it is rejected.
         why: String,
     },
+    /// The engine would allocate more than its budget for this image size and these
+    /// settings ([`crate::memory`]); nothing was allocated.
+    #[error(
+        "the image size and settings need {} of memory, over the budget of {} (a smaller image, fewer reference levels or a larger budget would do)",
+        crate::memory::format_mb(*need),
+        crate::memory::format_mb(*budget)
+    )]
+    MemoryBudget {
+        /// Bytes the engine would allocate.
+        need: usize,
+        /// Bytes it may allocate.
+        budget: usize,
+    },
     /// A frame does not match the camera it is meant for.
     #[error("bad frame: {0}")]
     BadFrame(String),

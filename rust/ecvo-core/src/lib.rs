@@ -19,6 +19,7 @@ pub mod config;
 pub mod correction;
 pub mod counters;
 pub mod error;
+pub mod memory;
 pub mod motion;
 pub mod prepare;
 pub mod prior;
@@ -29,11 +30,12 @@ pub mod tracker;
 
 pub use camera::{Camera, FrameView};
 pub use config::{
-    Config, DepthNoiseModel, FilterConfig, MAX_SCHEDULE_SHIFT, Mode, MotionConfig, MotionLevel,
-    MotionPrior, Preset, ReferenceLevel, SCHEDULE_SHIFT_SIDE, Schedule, Weighting,
-    parse_point_budget, parse_schedule,
+    Config, DepthNoiseModel, FilterConfig, MAX_PYRAMID_LEVEL, MAX_SCHEDULE_SHIFT, MIN_LEVEL_SIDE,
+    Mode, MotionConfig, MotionLevel, MotionPrior, Preset, ReferenceLevel, SCHEDULE_SHIFT_SIDE,
+    Schedule, Weighting, parse_point_budget, parse_schedule,
 };
 pub use error::{Error, Result};
+pub use memory::{DEFAULT_MEMORY_BUDGET, MemoryEstimate};
 pub use motion::{MotionEstimator, MotionResult};
 pub use nalgebra;
 pub use prepare::simd::path_name as simd_path;

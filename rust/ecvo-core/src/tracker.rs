@@ -561,8 +561,12 @@ pub struct Odometry {
 }
 
 impl Odometry {
-    /// An engine for `config`; fails on an invalid configuration.
+    /// An engine for `config`; fails on an invalid configuration, and on one whose
+    /// memory ([`crate::memory::estimate`]) exceeds [`Config::memory_budget`]
+    /// ([`crate::Error::MemoryBudget`]), before allocating anything.
     pub fn new(config: Config) -> Result<Self> {
+        config.validate()?;
+        crate::memory::check_budget(crate::memory::estimate(&config).bytes, config.memory_budget)?;
         let tracker = Tracker::new(config)?;
         Ok(Odometry {
             preparer: Preparer::new(tracker.config()),
@@ -578,7 +582,8 @@ impl Odometry {
         let slot = self.pool.iter().position(|f| Arc::strong_count(f) == 1);
         let mut frame = match slot {
             Some(i) => self.pool.swap_remove(i),
-            None => Arc::new(PreparedFrame::default()),
+            // Reserved at full size, so that memory is what `memory::estimate` says.
+            None => Arc::new(PreparedFrame::for_config(self.tracker.config())),
         };
         let prepared = Arc::get_mut(&mut frame).expect("a free pooled frame has one owner");
         if let Err(e) = self.preparer.prepare_into(view, prepared) {

@@ -177,20 +177,38 @@ fn validate(opts: &PipelineOptions) -> Result<()> {
     Ok(())
 }
 
+/// Prepared frames the pool holds: the previous frame, one per level, the one being
+/// tracked, the tracker queue, the one being prepared, the filter's previous frame
+/// (kept to compute \[A\] ahead), the geometry queue and the one being added.
+fn frame_pool_capacity(config: &Config, options: &PipelineOptions) -> usize {
+    let q = options.queue_capacity;
+    let geometry_frames = if options.geometry.is_some() { q + 1 } else { 0 };
+    config.reference_levels.len() + 1 + 1 + q + 1 + 1 + geometry_frames
+}
+
+/// Raw input buffers the pool holds: the input queue, the one being filled and the
+/// one being prepared, and one spare.
+fn raw_pool_capacity(options: &PipelineOptions) -> usize {
+    options.queue_capacity + 3
+}
+
 impl Pipeline {
     /// Starts the stage threads and the compute pool. Fails on an invalid
-    /// configuration or option, or if a thread cannot be started.
+    /// configuration or option, on one that needs more memory than
+    /// [`Config::memory_budget`] ([`Pipeline::memory_needed`]), or if a thread cannot
+    /// be started.
     pub fn new(config: Config, options: PipelineOptions) -> Result<Pipeline> {
         validate(&options)?;
+        config.validate()?;
+        ecvo_core::memory::check_budget(
+            Pipeline::memory_needed(&config, &options),
+            config.memory_budget,
+        )?;
         let tracker: Tracker<PooledFrame> = Tracker::new(config.clone())?;
         let preparer = Preparer::new(&config);
         let levels = config.reference_levels.len();
         let q = options.queue_capacity;
-        let geometry_frames = if options.geometry.is_some() { q + 1 } else { 0 };
-        // Previous + one per level + the one being tracked + the tracker queue + the
-        // one being prepared + the filter's previous frame (kept to compute [A] ahead)
-        // + the geometry queue and the one being added.
-        let pool_capacity = levels + 1 + 1 + q + 1 + 1 + geometry_frames;
+        let pool_capacity = frame_pool_capacity(&config, &options);
 
         // Counted from the start, so that a pipeline dropped before its workers
         // have even started still waits for them.
@@ -225,10 +243,11 @@ impl Pipeline {
             last_input: Mutex::new(LastInput {
                 camera: config.camera,
                 timestamp: None,
+                timestamp_ns: None,
                 hash: None,
             }),
             // Raw buffers are created now too, for the same reason as the frame pool.
-            raw: Mutex::new(RawPool::new(q + 3, config.camera)),
+            raw: Mutex::new(RawPool::new(raw_pool_capacity(&options), config.camera)),
             raw_freed: Condvar::new(),
             input: Queue::new(q),
             prepared: Queue::new(q),
@@ -288,6 +307,56 @@ impl Pipeline {
         Ok(pipeline)
     }
 
+    /// What a pipeline of `config` and `options` allocates, in bytes, computed
+    /// without allocating: an upper bound of its pooled prepared frames (previous,
+    /// references, the queues' and stages' frames), its raw input buffers, the
+    /// preparer's and the two motion estimators' scratch ([`ecvo_core::memory`]), the
+    /// geometry stage's cloud, and the outputs channel and trajectory window when
+    /// they are bounded. [`Pipeline::new`] refuses a configuration whose need exceeds
+    /// [`Config::memory_budget`] ([`ecvo_core::Error::MemoryBudget`]) before it
+    /// allocates anything.
+    ///
+    /// Not counted, because nothing bounds them: a trajectory kept without a window
+    /// (about 100 bytes a frame), and in live mode the raw buffers allocated for
+    /// pushers beyond the pool (more threads pushing at once than it holds).
+    pub fn memory_needed(config: &Config, options: &PipelineOptions) -> usize {
+        use ecvo_core::memory;
+        let n = config.camera.pixels();
+        let frames = frame_pool_capacity(config, options) * memory::prepared_frame_bytes(config);
+        let raw = raw_pool_capacity(options) * (n * (size_of::<u8>() + size_of::<u16>()));
+        let scratch = memory::preparer_bytes(config) + 2 * memory::estimator_bytes(config);
+        let geometry = options.geometry.map_or(0, |g| {
+            let point = size_of::<CloudPoint>();
+            let stride = g.point_stride.max(1);
+            let staged = config.camera.width.div_ceil(stride)
+                * config.camera.height.div_ceil(stride)
+                * point;
+            // hashbrown: buckets a power of two at least 8/7 of the capacity, each a
+            // key and a control byte.
+            let voxels = g.voxel_size_m.map_or(0, |_| {
+                (g.max_points.saturating_mul(8) / 7 + 1).next_power_of_two()
+                    * (size_of::<(i32, i32, i32)>() + 1)
+            });
+            g.max_points.saturating_mul(point) + voxels + staged
+        });
+        let outputs = options
+            .output_queue
+            .map_or(0, |q| q.saturating_mul(size_of::<TrackedFrame>()));
+        // Each kept pose is a record in one of two double-ended queues that may double.
+        let poses = match (options.keep_trajectory, options.trajectory_window) {
+            (true, Some(w)) => w.saturating_mul(4 * size_of::<PoseRecord>()),
+            _ => 0,
+        };
+        memory::with_margin(
+            frames
+                .saturating_add(raw)
+                .saturating_add(scratch)
+                .saturating_add(geometry)
+                .saturating_add(outputs)
+                .saturating_add(poses),
+        )
+    }
+
     fn spawn(&mut self, stage: Stage, body: impl FnOnce(&Shared) + Send + 'static) -> Result<()> {
         let shared = self.shared.clone();
         let handle = std::thread::Builder::new()
@@ -344,6 +413,28 @@ impl Pipeline {
         timestamp: f64,
         fill: impl FnOnce(&mut [u8], &mut [u16]),
     ) -> Result<PushStatus> {
+        self.push_stamped(timestamp, None, fill)
+    }
+
+    /// [`Pipeline::push`] with the timestamp in integer nanoseconds, as cameras give
+    /// it (Android's `Image.getTimestamp`): the order check compares the integers
+    /// ([`Error::TimestampNsNotIncreasing`], in nanoseconds), so two frames 1 ns apart
+    /// are told apart at any magnitude, where their seconds as `f64` may be equal
+    /// (above 2^53 ns, about 104 days). The engine gets `ns / 1e9` seconds.
+    pub fn push_ns(
+        &self,
+        timestamp_ns: i64,
+        fill: impl FnOnce(&mut [u8], &mut [u16]),
+    ) -> Result<PushStatus> {
+        self.push_stamped(timestamp_ns as f64 / 1e9, Some(timestamp_ns), fill)
+    }
+
+    fn push_stamped(
+        &self,
+        timestamp: f64,
+        timestamp_ns: Option<i64>,
+        fill: impl FnOnce(&mut [u8], &mut [u16]),
+    ) -> Result<PushStatus> {
         let pushed_at = Instant::now();
         let s = &*self.shared;
         if !timestamp.is_finite() {
@@ -355,7 +446,7 @@ impl Pipeline {
         if s.aborted() || s.input_closed.load(Ordering::Acquire) {
             return Err(s.stopped_error());
         }
-        s.check_timestamp(&lock(&s.last_input), timestamp)?;
+        s.check_timestamp(&lock(&s.last_input), timestamp, timestamp_ns)?;
         let raw = s.take_raw()?;
         let mut guard = RawGuard {
             shared: s,
@@ -372,11 +463,12 @@ impl Pipeline {
         {
             // Checked again: another thread may have pushed meanwhile.
             let mut last = lock(&s.last_input);
-            s.check_timestamp(&last, timestamp)?;
+            s.check_timestamp(&last, timestamp, timestamp_ns)?;
             // A frame without any depth (a covered lens) goes to the tracker, which
             // flags it lost, however often it comes.
             let repeated = !blank && last.hash == Some(hash);
             last.timestamp = Some(timestamp);
+            last.timestamp_ns = timestamp_ns;
             last.hash = Some(hash);
             if repeated {
                 drop(last);

@@ -133,6 +133,8 @@ pub(crate) struct LastInput {
     /// The intrinsics frames pushed from now on carry.
     pub(crate) camera: Camera,
     pub(crate) timestamp: Option<f64>,
+    /// The last accepted timestamp in nanoseconds, when it came through `push_ns`.
+    pub(crate) timestamp_ns: Option<i64>,
     pub(crate) hash: Option<u64>,
 }
 
@@ -181,7 +183,24 @@ pub fn frame_hash(intensity: &[u8], depth: &[u16]) -> u64 {
 
 impl Shared {
     /// Fails (and counts) if `timestamp` is not after the last accepted frame's.
-    pub(crate) fn check_timestamp(&self, last: &LastInput, timestamp: f64) -> Result<()> {
+    /// Refuses a timestamp not after the last accepted one: in integer nanoseconds
+    /// when both came with them (`push_ns`), in seconds otherwise.
+    pub(crate) fn check_timestamp(
+        &self,
+        last: &LastInput,
+        timestamp: f64,
+        timestamp_ns: Option<i64>,
+    ) -> Result<()> {
+        if let (Some(previous_ns), Some(ns)) = (last.timestamp_ns, timestamp_ns) {
+            if ns <= previous_ns {
+                self.update_progress(|p| p.timestamps_rejected += 1);
+                return Err(Error::TimestampNsNotIncreasing {
+                    previous_ns,
+                    timestamp_ns: ns,
+                });
+            }
+            return Ok(());
+        }
         match last.timestamp {
             Some(previous) if timestamp <= previous => {
                 self.update_progress(|p| p.timestamps_rejected += 1);

@@ -601,3 +601,34 @@ fn live_pushes_from_many_threads_report_every_drop_and_return_the_extra_buffers(
     // The run did need them (else it tests nothing new).
     assert!(raw.allocated >= 2, "{}", raw.allocated);
 }
+
+#[test]
+fn nanosecond_timestamps_are_compared_as_integers_at_any_magnitude() {
+    let (config, frames) = stream(3);
+    let p = Pipeline::new(config, PipelineOptions::default()).unwrap();
+    let push_ns = |ns: i64, f: &Frame| {
+        p.push_ns(ns, |i, d| {
+            i.copy_from_slice(&f.intensity);
+            d.copy_from_slice(&f.depth);
+        })
+    };
+    let t = 9_000_000_000_000_000_000i64;
+    // Equal as f64 seconds, one nanosecond apart as integers.
+    assert_eq!(t as f64 / 1e9, (t + 1) as f64 / 1e9);
+    push_ns(t, &frames[0]).unwrap();
+    push_ns(t + 1, &frames[1]).unwrap();
+    let again = push_ns(t + 1, &frames[2]);
+    assert_eq!(
+        again,
+        Err(Error::TimestampNsNotIncreasing {
+            previous_ns: t + 1,
+            timestamp_ns: t + 1
+        })
+    );
+    let msg = again.unwrap_err().to_string();
+    assert!(msg.contains("9000000000000000001 ns"), "{msg}");
+    push_ns(t + 2, &frames[2]).unwrap();
+    p.flush().unwrap();
+    let st = p.stats();
+    assert_eq!((st.pushed, st.timestamps_rejected), (3, 1), "{st:?}");
+}

@@ -40,6 +40,16 @@ pub enum Error {
         /// The rejected frame's timestamp (seconds).
         timestamp: f64,
     },
+    /// [`crate::Pipeline::push_ns`]: the frame's timestamp is not greater than the
+    /// last accepted frame's, compared as integer nanoseconds. As
+    /// [`Error::TimestampNotIncreasing`] otherwise.
+    #[error("timestamp {timestamp_ns} ns is not after the previous frame's ({previous_ns} ns)")]
+    TimestampNsNotIncreasing {
+        /// The last accepted frame's timestamp (nanoseconds).
+        previous_ns: i64,
+        /// The rejected frame's timestamp (nanoseconds).
+        timestamp_ns: i64,
+    },
 }
 
 /// Result with the pipeline's error.

@@ -14,6 +14,12 @@ pub const SCHEDULE_SHIFT_SIDE: usize = 640;
 /// schedules reach level 3, and a configuration at most level 6.
 pub const MAX_SCHEDULE_SHIFT: usize = 3;
 
+/// The smallest side, in pixels, of the coarsest pyramid level a schedule may use.
+pub const MIN_LEVEL_SIDE: usize = 8;
+
+/// The deepest pyramid level a configuration may use, whatever the image size.
+pub const MAX_PYRAMID_LEVEL: usize = 6;
+
 /// The smallest point budget a step may have.
 pub const MIN_POINT_BUDGET: usize = 64;
 
@@ -66,6 +72,21 @@ impl Schedule {
         k
     }
 
+    /// The deepest pyramid level an image of `camera`'s size has: the most halvings
+    /// (at most [`MAX_PYRAMID_LEVEL`]) that leave both sides at least
+    /// [`MIN_LEVEL_SIDE`] pixels (0 for images under 16 pixels on a side, 3 at 64x64,
+    /// 2 at 64x48).
+    pub fn max_level_for(camera: &Camera) -> usize {
+        let (mut w, mut h) = (camera.width, camera.height);
+        let mut k = 0;
+        while k < MAX_PYRAMID_LEVEL && w / 2 >= MIN_LEVEL_SIDE && h / 2 >= MIN_LEVEL_SIDE {
+            w /= 2;
+            h /= 2;
+            k += 1;
+        }
+        k
+    }
+
     /// The steps of this schedule on `camera`. The paper's sampling is taken as
     /// written at every size (it was made for 640x480). The pyramid schedules are
     /// written for images of about 320 pixels across ([`Schedule::levels`]); on a
@@ -76,15 +97,22 @@ impl Schedule {
     /// suite that is the same drift per second as the full-resolution step (real
     /// 1.01 translation / 0.97 rotation, synthetic 0.96 / 1.02) in about 0.7 of the
     /// time: the lookups run on an image four times smaller (`docs/profile.md`).
+    ///
+    /// On an image too small for a step's level (fewer than [`MIN_LEVEL_SIDE`] pixels
+    /// on a side there), the step runs on the deepest level the image has
+    /// ([`Schedule::max_level_for`]): 64x48 runs levels 2, 2, 1, 0 instead of 3, 2,
+    /// 1, 0, and 8192x8 runs every step on the full image. Sizes whose levels all
+    /// fit are unchanged.
     pub fn levels_for(self, camera: &Camera) -> Vec<MotionLevel> {
         let k = match self {
             Schedule::PaperSampling => 0,
             Schedule::Pyramid | Schedule::PyramidStride2 => Self::shift_for(camera),
         };
+        let deepest = Self::max_level_for(camera);
         self.levels()
             .into_iter()
             .map(|l| MotionLevel {
-                pyramid_level: l.pyramid_level + k,
+                pyramid_level: (l.pyramid_level + k).min(deepest),
                 stride: (l.stride >> k).max(1),
                 ..l
             })

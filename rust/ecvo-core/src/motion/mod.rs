@@ -313,6 +313,20 @@ impl Loops for MotionEstimator {
     }
 }
 
+/// The bytes [`MotionEstimator::with_capacity`]`(max_points)` holds: per chunk of
+/// [`CHUNK`] points, the template's four coordinates, the chunk's residual arrays and
+/// its warp scratch, and the per-chunk sums (counted twice: rayon may collect them
+/// into a fresh vector).
+pub(crate) fn scratch_bytes(max_points: usize) -> usize {
+    let chunks = max_points.div_ceil(CHUNK);
+    let per_point = 4 * size_of::<f32>() // template x, y, z, i
+        + 13 * size_of::<f32>() // ri rz sz gx gy dx dy x y z cell ax ay
+        + size_of::<crate::prepare::Sample>(); // tmp
+    let per_chunk_sums =
+        size_of::<NormalEquations>() + size_of::<f64>() + size_of::<(PassSums, f64)>();
+    chunks * (CHUNK.next_multiple_of(lanes::LANES) * per_point + 2 * per_chunk_sums)
+}
+
 /// True when a loop over `chunks` chunks is worth handing to rayon: each of at least
 /// two tasks gets [`MIN_CHUNKS_PER_TASK`] chunks.
 fn splits(chunks: usize) -> bool {

@@ -1,0 +1,239 @@
+//! `memory::estimate` is an upper bound of what the sequential engine really
+//! allocates: a counting global allocator records the peak of the bytes outstanding
+//! while `Odometry` is created and tracks a moving procedural scene, at several sizes
+//! from the documented minimum (8x8) to 1280x720, and the estimate must cover it (and
+//! not be more than about twice it, so that a budget check means something). Also:
+//! the budget refuses before allocating, and every size from the minimum runs without
+//! a configuration error.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use ecvo_core::memory::{self, MB};
+use ecvo_core::{Camera, Config, Error, FrameView, Mode, Odometry, Preset};
+
+struct Counting;
+
+static CURRENT: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+fn grow(n: usize) {
+    let now = CURRENT.fetch_add(n, Ordering::Relaxed) + n;
+    PEAK.fetch_max(now, Ordering::Relaxed);
+}
+
+// SAFETY: every method forwards its arguments unchanged to `System`, which upholds
+// the `GlobalAlloc` contract; the bookkeeping is atomics only and cannot re-enter the
+// allocator.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: the caller's `layout` contract is passed on to `System` as is.
+        let p = unsafe { System.alloc(layout) };
+        if !p.is_null() {
+            grow(layout.size());
+        }
+        p
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: as for `alloc`.
+        let p = unsafe { System.alloc_zeroed(layout) };
+        if !p.is_null() {
+            grow(layout.size());
+        }
+        p
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        // SAFETY: `ptr` was allocated by `System` with `layout`, as the caller
+        // guarantees.
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        if !p.is_null() {
+            grow(new_size);
+            CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
+        }
+        p
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: as for `realloc`.
+        unsafe { System.dealloc(ptr, layout) };
+        CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// The tests measure one process-wide counter: one at a time.
+static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    SERIAL.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn camera(width: usize, height: usize) -> Camera {
+    let f = 0.8 * width.max(height) as f64;
+    Camera {
+        width,
+        height,
+        fx: f,
+        fy: f,
+        cx: (width as f64 - 1.0) / 2.0,
+        cy: (height as f64 - 1.0) / 2.0,
+        depth_scale: 1000.0,
+    }
+}
+
+/// A textured, curved wall seen by a camera sliding sideways: frame `k` shifts the
+/// pattern by `k` pixels, so the tracker registers, corrects and replaces references.
+fn frame(c: &Camera, k: usize) -> (Vec<u8>, Vec<u16>) {
+    let (w, h) = (c.width, c.height);
+    let s = 64.0 / w.max(h) as f64;
+    let mut gray = Vec::with_capacity(w * h);
+    let mut depth = Vec::with_capacity(w * h);
+    for y in 0..h {
+        for x in 0..w {
+            let u = (x + k) as f64 * s;
+            let v = y as f64 * s;
+            let g = 128.0
+                + 50.0 * (u * 0.9).sin() * (v * 0.7).cos()
+                + 30.0 * (u * 0.23 + v * 0.31).sin();
+            gray.push(g.clamp(0.0, 255.0) as u8);
+            depth.push((1500.0 + 200.0 * (u * 0.05).sin() + 100.0 * (v * 0.07).cos()) as u16);
+        }
+    }
+    (gray, depth)
+}
+
+/// Peak bytes outstanding above the baseline while `run` runs.
+fn peak_of(run: impl FnOnce()) -> usize {
+    let base = CURRENT.load(Ordering::Relaxed);
+    PEAK.store(base, Ordering::Relaxed);
+    run();
+    PEAK.load(Ordering::Relaxed) - base
+}
+
+fn track(config: &Config, frames: &[(Vec<u8>, Vec<u16>)]) {
+    let mut odo = Odometry::new(config.clone()).expect("a valid configuration");
+    for (k, (g, d)) in frames.iter().enumerate() {
+        odo.push(FrameView {
+            timestamp: k as f64 / 30.0,
+            intensity: g,
+            depth: d,
+        })
+        .expect("frames of the right size");
+    }
+    assert!(odo.frames_allocated() <= memory::max_prepared_frames(config));
+}
+
+#[test]
+fn the_estimate_bounds_what_odometry_allocates() {
+    let _serial = serial();
+    // Warm rayon's global pool (its threads and queues are not the engine's).
+    track(
+        &Config::new(camera(64, 48), Preset::Phone, Mode::L2),
+        &[frame(&camera(64, 48), 0)],
+    );
+    for (w, h) in [
+        (8, 8),
+        (64, 48),
+        (8192, 8),
+        (8, 2048),
+        (320, 180),
+        (640, 480),
+        (1280, 720),
+    ] {
+        for mode in [Mode::Naive, Mode::L2] {
+            let c = camera(w, h);
+            let config = Config::new(c, Preset::Phone, mode);
+            let est = memory::estimate(&config);
+            let frames: Vec<_> = (0..12).map(|k| frame(&c, k)).collect();
+            let peak = peak_of(|| track(&config, &frames));
+            println!(
+                "{w}x{h} {mode:?}: estimate {} (frame {} x {}), peak {}",
+                memory::format_mb(est.bytes),
+                memory::format_mb(est.frame_bytes),
+                est.frames,
+                memory::format_mb(peak)
+            );
+            assert!(
+                peak <= est.bytes,
+                "{w}x{h} {mode:?}: peak {peak} above the estimate {est:?}"
+            );
+            // Tight enough to mean something where the image dominates.
+            if w * h >= 320 * 180 {
+                assert!(
+                    est.bytes <= 2 * peak + memory::FIXED_BYTES,
+                    "{w}x{h} {mode:?}: estimate {est:?} far above the peak {peak}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn odometry_refuses_above_its_budget_with_need_and_budget() {
+    let _serial = serial();
+    let mut config = Config::new(camera(4096, 4096), Preset::Phone, Mode::L2);
+    let need = memory::estimate(&config).bytes;
+    assert!(
+        need > memory::DEFAULT_MEMORY_BUDGET,
+        "4096x4096 needs {need}"
+    );
+    let before = CURRENT.load(Ordering::Relaxed);
+    let err = Odometry::new(config.clone()).err().expect("refused");
+    assert_eq!(
+        err,
+        Error::MemoryBudget {
+            need,
+            budget: memory::DEFAULT_MEMORY_BUDGET
+        }
+    );
+    let msg = err.to_string();
+    assert!(
+        msg.contains("512.0 MB") && msg.contains(&memory::format_mb(need)),
+        "{msg}"
+    );
+    // Nothing of the image's size was allocated to find that out.
+    assert!(
+        CURRENT.load(Ordering::Relaxed) < before + MB,
+        "allocated before refusing"
+    );
+    config.memory_budget = need;
+    assert!(Odometry::new(config).is_ok());
+}
+
+#[test]
+fn every_size_from_the_minimum_configures() {
+    for (w, h) in [
+        (8, 8),
+        (9, 8),
+        (15, 15),
+        (16, 16),
+        (64, 48),
+        (96, 72),
+        (8192, 8),
+        (8, 8192),
+        (17, 8191),
+    ] {
+        let c = camera(w, h);
+        for config in [
+            Config::new(c, Preset::Phone, Mode::L2),
+            Config::paper(c, Preset::Pc, Mode::L2),
+        ] {
+            config.validate().unwrap_or_else(|e| panic!("{w}x{h}: {e}"));
+            let levels = &config.motion.levels;
+            let deepest = levels.iter().map(|l| l.pyramid_level).max().unwrap();
+            assert!(
+                w >> deepest >= 8 && h >> deepest >= 8,
+                "{w}x{h}: {levels:?}"
+            );
+        }
+    }
+    let c = camera(7, 8);
+    match Odometry::new(Config::new(c, Preset::Phone, Mode::L2)) {
+        Err(Error::InvalidConfig { field, why }) => {
+            assert_eq!(field, "width/height");
+            assert!(why.contains("7x8") && why.contains("8x8"), "{why}");
+        }
+        other => panic!("7x8 gave {:?}", other.err()),
+    }
+}
