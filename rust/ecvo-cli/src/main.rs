@@ -311,6 +311,37 @@ struct TrackArgs {
     /// symlinks out); refused by default.
     #[arg(long)]
     allow_outside: bool,
+    /// Memory the run may allocate for frames (the engine's pools, pyramids and
+    /// templates plus the frames decoded ahead), e.g. 512M, 2G or a number of bytes;
+    /// a larger need is refused before anything is allocated. Default 512M (the
+    /// engine's default budget, sized for a phone).
+    #[arg(long, value_parser = parse_bytes)]
+    max_memory: Option<usize>,
+}
+
+/// `512M`, `2G`, `64MiB`, `1048576`: a size in bytes (K, M, G are powers of 1024).
+fn parse_bytes(text: &str) -> std::result::Result<usize, String> {
+    let t = text.trim();
+    let digits = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (num, unit) = t.split_at(digits);
+    let value: f64 = num
+        .parse()
+        .map_err(|_| format!("`{text}` is not a size (e.g. 512M, 2G)"))?;
+    let unit = unit.trim().to_ascii_uppercase();
+    let scale = match unit.trim_end_matches("IB").trim_end_matches('B') {
+        "" => 1.0,
+        "K" => 1024.0,
+        "M" => 1024.0 * 1024.0,
+        "G" => 1024.0 * 1024.0 * 1024.0,
+        _ => return Err(format!("`{text}`: unknown unit (use K, M or G)")),
+    };
+    let bytes = value * scale;
+    if !(bytes >= 1.0 && bytes < 1e18) {
+        return Err(format!("`{text}` is not a usable size"));
+    }
+    Ok(bytes as usize)
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -395,6 +426,7 @@ impl TrackArgs {
             threads: self.threads as usize,
             strict: self.strict,
             allow_outside: self.allow_outside,
+            max_memory: self.max_memory,
         }
     }
 }

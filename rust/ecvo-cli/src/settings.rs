@@ -39,6 +39,8 @@ pub struct TrackSettings {
     pub strict: bool,
     /// Read list entries that lead outside the sequence folder.
     pub allow_outside: bool,
+    /// The memory budget in bytes (`None`: the engine's default).
+    pub max_memory: Option<usize>,
 }
 
 /// The engine's method: ecvo's defaults, or the paper's as written, with single
@@ -267,6 +269,9 @@ impl TrackSettings {
         }
         if !self.contour_filter {
             config.filter.contour_angle_deg = None;
+        }
+        if let Some(b) = self.max_memory {
+            config.memory_budget = b;
         }
         config.validate().context("invalid tracker configuration")?;
         Ok(config)

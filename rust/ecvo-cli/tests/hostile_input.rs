@@ -301,3 +301,43 @@ fn inconsistencies_are_consistent() {
     let e = fails(&run_seq(&seq, &out, &[]), &["characters]"]);
     assert!(e.len() < 2000, "{} bytes of stderr", e.len());
 }
+
+#[test]
+fn a_frame_too_large_for_the_budget_is_refused_before_allocating() {
+    let dir = temp_dir("budget");
+    let seq = mini_sequence(&dir, 3);
+    let out = dir.join("out");
+    // 8192x8192 frames (the header says so; the data is never decoded).
+    let cam = seq.join("camera.json");
+    let text = fs::read_to_string(&cam)
+        .unwrap()
+        .replace("\"width\": 320", "\"width\": 8192")
+        .replace("\"height\": 180", "\"height\": 8192")
+        .replace("\"fx\": 250.0", "\"fx\": 6400.0")
+        .replace("\"fy\": 250.0", "\"fy\": 6400.0")
+        .replace("\"cx\": 159.5", "\"cx\": 4095.5")
+        .replace("\"cy\": 89.5", "\"cy\": 4095.5");
+    fs::write(&cam, text).unwrap();
+    for list in ["rgb.txt", "depth.txt"] {
+        for n in 0..3 {
+            let (_, f) = entry(&seq.join(list), n);
+            let png = fs::read(seq.join(&f)).unwrap();
+            fs::write(seq.join(&f), with_declared_size(&png, 8192, 8192)).unwrap();
+        }
+    }
+    let e = fails(
+        &run_seq(&seq, &out, &[]),
+        &["8192x8192", "memory budget of 512 MiB"],
+    );
+    assert!(e.contains("need"), "{e}");
+    // A smaller budget refuses the small stream too, naming both figures.
+    let seq = mini_sequence(&temp_dir("budget-small"), 3);
+    fails(
+        &run_seq(&seq, &out, &["--max-memory", "8M"]),
+        &["320x180 frames need", "memory budget of 8 MiB"],
+    );
+    fails(
+        &run_seq(&seq, &out, &["--max-memory", "lots"]),
+        &["--max-memory"],
+    );
+}
