@@ -448,7 +448,7 @@ mod tests {
                 "{threads} thread(s): largest 16:9 frame {w}x{h}, 4:3 {w4}x{h4} within {} MiB",
                 vga.memory_budget >> 20
             );
-            assert!(w >= 1024 && w < 8192, "{w}x{h}");
+            assert!((1024..8192).contains(&w), "{w}x{h}");
         }
     }
 }

@@ -338,7 +338,7 @@ fn parse_bytes(text: &str) -> std::result::Result<usize, String> {
         _ => return Err(format!("`{text}`: unknown unit (use K, M or G)")),
     };
     let bytes = value * scale;
-    if !(bytes >= 1.0 && bytes < 1e18) {
+    if !(1.0..1e18).contains(&bytes) {
         return Err(format!("`{text}` is not a usable size"));
     }
     Ok(bytes as usize)
