@@ -191,12 +191,11 @@ fn skipped_frames_are_reported_and_strict_refuses_them() {
 fn depth_without_valid_pixels_warns_at_once() {
     let dir = temp_dir("nodepth");
     let seq = mini_sequence(&dir, 4);
-    let cam = seq.join("camera.json");
-    // 1e-3 units per metre: every raw value reads as kilometres.
-    let text = fs::read_to_string(&cam)
-        .unwrap()
-        .replace("\"depth_scale\": 1000.0", "\"depth_scale\": 0.001");
-    fs::write(&cam, text).unwrap();
+    // Saturated depth (65535 raw, 65.5 m: beyond the filter's 8 m) in every frame.
+    for n in 0..4 {
+        let (_, f) = entry(&seq.join("depth.txt"), n);
+        ecvo_io::png::write_depth_png(seq.join(&f), &vec![u16::MAX; 320 * 180], 320, 180).unwrap();
+    }
     let o = run_seq(&seq, &dir.join("out"), &[]);
     let e = stderr(&o);
     assert!(
@@ -204,6 +203,22 @@ fn depth_without_valid_pixels_warns_at_once() {
         "{e}"
     );
     assert!(e.contains("4 without a valid depth pixel"), "{e}");
+    // Implausible intrinsics are refused before any frame is read.
+    let cam = seq.join("camera.json");
+    let good = fs::read_to_string(&cam).unwrap();
+    for (from, to) in [
+        ("\"fx\": 250.0", "\"fx\": 1e-5"),
+        ("\"fx\": 250.0", "\"fx\": 1e300"),
+        ("\"cx\": 159.5", "\"cx\": 1e12"),
+        ("\"depth_scale\": 1000.0", "\"depth_scale\": 1e-300"),
+    ] {
+        fs::write(&cam, good.replace(from, to)).unwrap();
+        let field = from.split('"').nth(1).unwrap();
+        fails(
+            &run_seq(&seq, &dir.join("out"), &[]),
+            &["camera.json", field],
+        );
+    }
 }
 
 #[test]
