@@ -1,12 +1,38 @@
 //! `nativeInit`'s arguments, checked into the engine's configuration.
 
-use ecvo_core::{Camera, Config, Mode, Preset};
-use ecvo_pipeline::{Admission, GeometryOptions, PipelineOptions};
-use jni::sys::jint;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use ecvo_core::{Camera, Config, DEFAULT_MEMORY_BUDGET, Mode, Preset};
+use ecvo_pipeline::{Admission, GeometryOptions, Pipeline, PipelineOptions};
+use jni::sys::{jint, jlong};
 
 use crate::depth16::Confidence;
 use crate::error::{Failure, bad};
 use crate::layout::{DepthFormat, TRAJECTORY_WINDOW};
+
+/// The memory budget of the trackers `nativeInit` creates from now on, in bytes
+/// (`nativeSetMemoryBudget`); [`DEFAULT_MEMORY_BUDGET`] (512 MiB) until set.
+static MEMORY_BUDGET: AtomicUsize = AtomicUsize::new(DEFAULT_MEMORY_BUDGET);
+
+/// The memory budget of the trackers created from now on, in bytes.
+pub fn memory_budget() -> usize {
+    MEMORY_BUDGET.load(Ordering::Relaxed)
+}
+
+/// Sets the memory budget of the trackers created from now on (trackers already
+/// running keep theirs); returns the previous one. Refuses 0 and negative values.
+pub fn set_memory_budget(bytes: jlong) -> Result<jlong, Failure> {
+    let b = usize::try_from(bytes)
+        .ok()
+        .filter(|&b| b > 0)
+        .ok_or_else(|| {
+            bad(format!(
+                "memoryBudget: {bytes} bytes is not a positive size"
+            ))
+        })?;
+    let old = MEMORY_BUDGET.swap(b, Ordering::Relaxed);
+    Ok(jlong::try_from(old).unwrap_or(jlong::MAX))
+}
 
 /// The settings of `nativeInit`, checked; the error names the bad field.
 #[derive(Clone, Debug)]
@@ -59,9 +85,13 @@ impl InitArgs {
         let depth_scale = match format {
             DepthFormat::Millimetres | DepthFormat::Depth16 => 1000.0,
             DepthFormat::CustomScale => {
-                if !(self.depth_scale.is_finite() && self.depth_scale > 0.0) {
+                let (lo, hi) = (
+                    ecvo_core::camera::MIN_DEPTH_SCALE,
+                    ecvo_core::camera::MAX_DEPTH_SCALE,
+                );
+                if !(lo..=hi).contains(&self.depth_scale) {
                     return Err(bad(format!(
-                        "depthScale: {} is not a positive number",
+                        "depthScale: {} units per metre is not in [{lo}, {hi}] (1000 for millimetres)",
                         self.depth_scale
                     )));
                 }
@@ -116,7 +146,8 @@ impl InitArgs {
             cy: self.cy,
             depth_scale,
         };
-        let config = Config::new(camera, preset, mode);
+        let mut config = Config::new(camera, preset, mode);
+        config.memory_budget = memory_budget();
         config.validate().map_err(|e| bad(e.to_string()))?;
         let options = PipelineOptions {
             threads,
@@ -131,6 +162,14 @@ impl InitArgs {
             ..PipelineOptions::default()
         };
         Ok((config, options, format, min_confidence))
+    }
+
+    /// The bytes a tracker of these settings allocates ([`Pipeline::memory_needed`]),
+    /// what `nativeInit` compares with the budget; or `IllegalArgument` naming the
+    /// bad field.
+    pub fn memory_needed(&self) -> Result<usize, Failure> {
+        let (config, options, _, _) = self.build()?;
+        Ok(Pipeline::memory_needed(&config, &options))
     }
 }
 

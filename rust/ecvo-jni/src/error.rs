@@ -20,9 +20,10 @@ impl From<ecvo_pipeline::Error> for Failure {
     fn from(e: ecvo_pipeline::Error) -> Self {
         use ecvo_pipeline::Error as E;
         match &e {
-            E::Core(_) | E::InvalidOptions { .. } | E::TimestampNotIncreasing { .. } => {
-                Failure::IllegalArgument(e.to_string())
-            }
+            E::Core(_)
+            | E::InvalidOptions { .. }
+            | E::TimestampNotIncreasing { .. }
+            | E::TimestampNsNotIncreasing { .. } => Failure::IllegalArgument(e.to_string()),
             E::Closed => Failure::IllegalState(e.to_string()),
             E::StagePanicked { .. } | E::Spawn(_) => Failure::Runtime(e.to_string()),
         }

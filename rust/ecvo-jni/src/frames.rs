@@ -1,7 +1,10 @@
 //! Frames from Java: direct buffers (packed or with padded rows) and primitive arrays.
 
-use jni::Env;
-use jni::objects::JByteBuffer;
+use std::sync::OnceLock;
+
+use jni::objects::{Global, JByteBuffer, JMethodID, JObject};
+use jni::signature::{Primitive, ReturnType};
+use jni::{Env, jni_sig, jni_str};
 
 use crate::error::{Failure, bad};
 
@@ -46,9 +49,8 @@ impl PlaneLayout {
         }
     }
 
-    /// Checks the stride against the row and a buffer of `len` bytes; the error names
-    /// the buffer `name`.
-    pub fn check(&self, name: &str, len: usize) -> Result<(), Failure> {
+    /// Checks the stride against the row; the error names the buffer `name`.
+    pub fn check_stride(&self, name: &str) -> Result<(), Failure> {
         if self.row_stride < self.row_bytes() {
             return Err(bad(format!(
                 "{name}: row stride {} is less than a row of {} bytes",
@@ -56,6 +58,13 @@ impl PlaneLayout {
                 self.row_bytes()
             )));
         }
+        Ok(())
+    }
+
+    /// Checks the stride against the row and a buffer of `len` bytes; the error names
+    /// the buffer `name`.
+    pub fn check(&self, name: &str, len: usize) -> Result<(), Failure> {
+        self.check_stride(name)?;
         if len < self.min_len() {
             return Err(bad(format!(
                 "{name}: buffer holds {len} bytes, the frame needs {} (row stride {})",
@@ -80,12 +89,67 @@ pub fn copy_plane(src: &[u8], layout: PlaneLayout, dst: &mut [u8]) {
     }
 }
 
-/// The bytes of a direct buffer, checked against `layout`.
+/// The method IDs and the `ByteOrder.LITTLE_ENDIAN` object [`direct`] needs, looked up
+/// once per process (they stay valid: `java.nio` classes are never unloaded), so that a
+/// push costs three plain method calls per buffer, not three lookups.
+struct BufferIds {
+    position: JMethodID,
+    limit: JMethodID,
+    order: JMethodID,
+    little_endian: Global<JObject<'static>>,
+}
+
+static BUFFER_IDS: OnceLock<BufferIds> = OnceLock::new();
+
+fn buffer_ids(env: &mut Env<'_>) -> Result<&'static BufferIds, Failure> {
+    if let Some(ids) = BUFFER_IDS.get() {
+        return Ok(ids);
+    }
+    let position = env.get_method_id(
+        jni_str!("java/nio/Buffer"),
+        jni_str!("position"),
+        jni_sig!("()I"),
+    )?;
+    let limit = env.get_method_id(
+        jni_str!("java/nio/Buffer"),
+        jni_str!("limit"),
+        jni_sig!("()I"),
+    )?;
+    let order = env.get_method_id(
+        jni_str!("java/nio/ByteBuffer"),
+        jni_str!("order"),
+        jni_sig!("()Ljava/nio/ByteOrder;"),
+    )?;
+    let le = env
+        .get_static_field(
+            jni_str!("java/nio/ByteOrder"),
+            jni_str!("LITTLE_ENDIAN"),
+            jni_sig!("Ljava/nio/ByteOrder;"),
+        )?
+        .l()?;
+    let little_endian = env.new_global_ref(&le)?;
+    env.delete_local_ref(le);
+    // Two threads may both look up; one set wins and the other's global is dropped
+    // here, on an attached thread.
+    Ok(BUFFER_IDS.get_or_init(|| BufferIds {
+        position,
+        limit,
+        order,
+        little_endian,
+    }))
+}
+
+/// The frame bytes of a direct buffer: from its `position()` to its `limit()`,
+/// checked against `layout` (bytes after the frame are ignored). A plane of more than
+/// one byte per pixel (depth) is read little-endian, so a buffer whose `order()` is not
+/// `LITTLE_ENDIAN` (`ByteBuffer.allocateDirect`'s default is big-endian) is refused:
+/// its samples were most likely written big-endian by `putShort`. Android's `Image`
+/// planes are in native order, little-endian on every Android ABI.
 ///
 /// The slice borrows memory the JVM owns: the caller must not keep it past the native
 /// call, during which the local reference `buf` keeps the buffer alive.
 pub fn direct<'b>(
-    env: &Env<'_>,
+    env: &mut Env<'_>,
     buf: &'b JByteBuffer<'_>,
     name: &str,
     layout: PlaneLayout,
@@ -102,14 +166,59 @@ pub fn direct<'b>(
     if ptr.is_null() {
         return Err(bad(format!("{name}: buffer is not direct")));
     }
-    layout.check(name, cap)?;
+    let ids = buffer_ids(env)?;
+    let int = ReturnType::Primitive(Primitive::Int);
+    // SAFETY: `buf` is a non-null java.nio.ByteBuffer, and `position`/`limit` are the
+    // IDs of java.nio.Buffer's `int position()` / `int limit()`, called without
+    // arguments and read as the int they return.
+    let (position, limit) = unsafe {
+        (
+            env.call_method_unchecked(buf, ids.position, int, &[])?
+                .i()?,
+            env.call_method_unchecked(buf, ids.limit, int, &[])?.i()?,
+        )
+    };
+    let (position, limit) = match (usize::try_from(position), usize::try_from(limit)) {
+        (Ok(p), Ok(l)) if p <= l && l <= cap => (p, l),
+        _ => {
+            return Err(bad(format!(
+                "{name}: position {position} and limit {limit} do not lie in the buffer's {cap} bytes"
+            )));
+        }
+    };
+    layout.check_stride(name)?;
+    if limit - position < layout.min_len() {
+        return Err(bad(format!(
+            "{name}: buffer holds {} bytes from position {position} to limit {limit}, the frame needs {} (row stride {}); after writing it with relative puts, call flip() or rewind()",
+            limit - position,
+            layout.min_len(),
+            layout.row_stride
+        )));
+    }
+    if layout.bytes_per_pixel > 1 {
+        // SAFETY: `order` is the ID of java.nio.ByteBuffer's `ByteOrder order()`, called
+        // on a ByteBuffer without arguments and read as the object it returns.
+        let order = unsafe {
+            env.call_method_unchecked(buf, ids.order, ReturnType::Object, &[])?
+                .l()?
+        };
+        let little = env.is_same_object(&order, &ids.little_endian)?;
+        env.delete_local_ref(order);
+        if !little {
+            return Err(bad(format!(
+                "{name}: the buffer's order() is BIG_ENDIAN (ByteBuffer.allocateDirect's default); {}-byte samples are read little-endian: call order(ByteOrder.LITTLE_ENDIAN) before writing them",
+                layout.bytes_per_pixel
+            )));
+        }
+    }
     // SAFETY: `ptr` is the address of a direct buffer of `cap` bytes (JNI's
     // GetDirectBufferAddress/Capacity), which the local reference `buf` keeps alive for
-    // the rest of this native call; the slice borrows `buf`, so it cannot outlive it.
-    // Java code may write the buffer concurrently (an `Image` plane is only recycled
-    // after `Image.close()`, which the caller does after the push returns); we only read
-    // bytes, so a concurrent write gives wrong pixels, never undefined memory access.
-    Ok(unsafe { std::slice::from_raw_parts(ptr, cap) })
+    // the rest of this native call, and `position <= limit <= cap`; the slice borrows
+    // `buf`, so it cannot outlive it. Java code may write the buffer concurrently (an
+    // `Image` plane is only recycled after `Image.close()`, which the caller does after
+    // the push returns); we only read bytes, so a concurrent write gives wrong pixels,
+    // never undefined memory access.
+    Ok(unsafe { std::slice::from_raw_parts(ptr.add(position), limit - position) })
 }
 
 /// Checks a Java array's length against the frame's.

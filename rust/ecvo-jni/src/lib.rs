@@ -7,7 +7,7 @@
 //!
 //! ## The native methods
 //!
-//! The 13 `@JvmStatic external fun` of `NativeBridge.kt` are declared once each with
+//! The 16 `@JvmStatic external fun` of `NativeBridge.kt` are declared once each with
 //! jni 0.22's `native_method!` (see [`NATIVE_METHODS`]): the macro checks at compile
 //! time that each Rust implementation matches the JNI signature written next to it,
 //! and exports it under its short JNI name (`Java_io_ecvo_NativeBridge_nativeInit`,
@@ -35,13 +35,16 @@
 //!
 //! ## Frames
 //!
-//! Direct `ByteBuffer`s are read from their base address (position 0), whatever their
-//! position or limit, as planes ([`PlaneLayout`]): `nativePushBuffers` takes packed rows,
+//! Direct `ByteBuffer`s are read from their `position()` to their `limit()` (which must
+//! hold the plane; bytes after it are ignored), as planes ([`PlaneLayout`]): `nativePushBuffers` takes packed rows,
 //! `nativePushStrided` rows a given number of bytes apart, as `ImageReader` planes with
 //! padding are (the last row need not be padded; a stride shorter than a row or a buffer
 //! shorter than the plane is an `IllegalArgumentException` naming the buffer). Depth
-//! holds 16-bit samples in **native byte order**, little-endian on every Android ABI,
-//! decoded as little-endian here; intensity 8-bit gray. Arrays hold exactly
+//! holds 16-bit samples **little-endian** (native order on every Android ABI, and the
+//! order of `ImageReader` planes): a depth buffer whose `order()` is not
+//! `LITTLE_ENDIAN` is refused (`ByteBuffer.allocateDirect` is big-endian by default);
+//! intensity is 8-bit gray. `position()`, `limit()` and `order()` are called through
+//! method IDs looked up once. Arrays hold exactly
 //! `width * height` values. The data is copied into a pooled frame inside
 //! [`ecvo_pipeline::Pipeline::push`]'s fill closure; no pointer is kept after the call.
 //! A push returns 0 (queued), 1 (queued, an older waiting frame dropped: live mode) or
@@ -70,15 +73,19 @@ mod config;
 mod depth16;
 mod error;
 mod frames;
+#[doc(hidden)]
+pub mod handles;
 mod layout;
+mod limits;
 mod natives;
 mod tracker;
 
-pub use config::InitArgs;
+pub use config::{InitArgs, memory_budget, set_memory_budget};
 pub use depth16::*;
 pub use error::Failure;
 pub use frames::{PlaneLayout, copy_plane};
 pub use layout::*;
+pub use limits::MAX_LIVE_TRACKERS;
 pub use natives::*;
 pub use tracker::NativeTracker;
 

@@ -75,6 +75,65 @@ bridge! {
         fn native_point_cloud(handle: jlong, max_points: jint) -> [jfloat];
     NATIVE_RELEASE = "Java_io_ecvo_NativeBridge_nativeRelease",
         fn native_release(handle: jlong);
+    NATIVE_MEMORY_NEEDED = "Java_io_ecvo_NativeBridge_nativeMemoryNeeded",
+        fn native_memory_needed(width: jint, height: jint, fx: jdouble, fy: jdouble, cx: jdouble, cy: jdouble,
+            depth_format: jint, depth_scale: jdouble, min_confidence: jint,
+            preset: jint, mode: jint, live: jboolean, threads: jint, point_cloud: jboolean) -> jlong;
+    NATIVE_SET_MEMORY_BUDGET = "Java_io_ecvo_NativeBridge_nativeSetMemoryBudget",
+        fn native_set_memory_budget(bytes: jlong) -> jlong;
+}
+
+/// `nativeMemoryNeeded`: the bytes `nativeInit` with the same arguments would
+/// allocate (and compare with the budget), without allocating; the same
+/// `IllegalArgumentException`s for bad settings.
+fn native_memory_needed<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    width: jint,
+    height: jint,
+    fx: jdouble,
+    fy: jdouble,
+    cx: jdouble,
+    cy: jdouble,
+    depth_format: jint,
+    depth_scale: jdouble,
+    min_confidence: jint,
+    preset: jint,
+    mode: jint,
+    live: jboolean,
+    threads: jint,
+    point_cloud: jboolean,
+) -> jni::errors::Result<jlong> {
+    let args = InitArgs {
+        width,
+        height,
+        fx,
+        fy,
+        cx,
+        cy,
+        depth_format,
+        depth_scale,
+        min_confidence,
+        preset,
+        mode,
+        live,
+        threads,
+        point_cloud,
+    };
+    run(env, |_| {
+        let need = args.memory_needed()?;
+        Ok(jlong::try_from(need).unwrap_or(jlong::MAX))
+    })
+}
+
+/// `nativeSetMemoryBudget`: the budget of the trackers created from now on; returns
+/// the previous one.
+fn native_set_memory_budget<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    bytes: jlong,
+) -> jni::errors::Result<jlong> {
+    run(env, |_| crate::config::set_memory_budget(bytes))
 }
 
 fn native_init<'local>(
@@ -116,7 +175,7 @@ fn native_init<'local>(
 
 /// Pushes one frame read from two direct buffers laid out as given.
 fn push_direct(
-    env: &Env<'_>,
+    env: &mut Env<'_>,
     handle: jlong,
     timestamp_ns: jlong,
     depth: &JByteBuffer<'_>,

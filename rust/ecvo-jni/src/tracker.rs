@@ -12,7 +12,7 @@ use crate::depth16::Depth16Decoder;
 use crate::error::Failure;
 #[cfg(feature = "test-hooks")]
 use crate::layout::TEST_PANIC_TIMESTAMP_NS;
-use crate::layout::{DepthFormat, ns_to_seconds};
+use crate::layout::{DepthFormat, NO_POSE, ns_to_seconds};
 
 /// One tracker behind a handle.
 pub struct NativeTracker {
@@ -24,6 +24,8 @@ pub struct NativeTracker {
     /// Recent (seconds bits, nanoseconds) pairs, so that `nativeGetPose` returns the
     /// exact nanosecond timestamp that was pushed.
     stamps: Mutex<VecDeque<(u64, jlong)>>,
+    /// Its place under [`crate::limits::MAX_LIVE_TRACKERS`], given back when it drops.
+    _slot: crate::limits::Slot,
 }
 
 /// Pushed timestamps remembered for `nativeGetPose` (far more than the frames the
@@ -50,6 +52,7 @@ pub(crate) fn tracker(handle: jlong) -> Result<Arc<NativeTracker>, Failure> {
 pub(crate) fn init(args: &InitArgs) -> Result<jlong, Failure> {
     let (config, options, format, confidence) = args.build()?;
     let (width, height) = (config.camera.width, config.camera.height);
+    let slot = crate::limits::reserve()?;
     let pipeline = Pipeline::new(config, options)?;
     let t = Arc::new(NativeTracker {
         pipeline,
@@ -58,6 +61,7 @@ pub(crate) fn init(args: &InitArgs) -> Result<jlong, Failure> {
         format,
         depth16: Depth16Decoder::new(confidence),
         stamps: Mutex::new(VecDeque::with_capacity(STAMPS_KEPT)),
+        _slot: slot,
     });
     let handle = NEXT_HANDLE.fetch_add(1, Ordering::Relaxed);
     lock(&REGISTRY).insert(handle, t);
@@ -84,10 +88,16 @@ impl NativeTracker {
         if timestamp_ns == TEST_PANIC_TIMESTAMP_NS {
             panic!("ecvo-jni test hook: injected panic");
         }
+        if timestamp_ns == NO_POSE {
+            return Err(Failure::IllegalArgument(format!(
+                "timestampNs: {timestamp_ns} (Long.MIN_VALUE) is NO_POSE, the \"no pose yet\" of getPose, not a timestamp"
+            )));
+        }
         let seconds = ns_to_seconds(timestamp_ns);
         let mut result = Ok(());
         let format = self.format;
-        let status = self.pipeline.push(seconds, |i, d| {
+        // Compared with the previous frame's as integer nanoseconds.
+        let status = self.pipeline.push_ns(timestamp_ns, |i, d| {
             result = fill(i, d);
             if result.is_err() {
                 // The buffer must be overwritten entirely whatever happens.

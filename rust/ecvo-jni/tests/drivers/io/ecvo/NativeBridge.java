@@ -31,4 +31,8 @@ public final class NativeBridge {
     public static native double[] nativeStats(long handle);
     public static native float[] nativePointCloud(long handle, int maxPoints);
     public static native void nativeRelease(long handle);
+    public static native long nativeMemoryNeeded(int width, int height, double fx, double fy, double cx, double cy,
+            int depthFormat, double depthScale, int minConfidence, int preset, int mode, boolean live, int threads,
+            boolean pointCloud);
+    public static native long nativeSetMemoryBudget(long bytes);
 }

@@ -125,7 +125,7 @@ class NativeBridgeTest {
         Tracker(config(s)).use { t ->
             for (i in s.stamps.indices) {
                 d.clear(); d.asShortBuffer().put(s.depth[i])
-                g.clear(); g.put(s.intensity[i])
+                g.clear(); g.put(s.intensity[i]).rewind() // the frame lies from position() to limit()
                 // The caller may scribble over its buffers once pushFrame returns.
                 assertEquals(PushStatus.ACCEPTED, t.pushFrame(s.stamps[i], d, g))
                 g.clear(); while (g.hasRemaining()) g.put(0x55)
@@ -334,6 +334,22 @@ class NativeBridgeTest {
         assertEquals(Long.MAX_VALUE, t.getPose(FloatArray(16)))
     }
 
+    @Test fun timestampsAreIntegerNanosecondsAndNoPoseIsNotOne(): Unit = Tracker(config()).use { t ->
+        fun frame(k: Int) = ShortArray(pixels) { 1000 } to ByteArray(pixels) { ((it * 7 + k) % 251).toByte() }
+        assertThrows<IllegalArgumentException>("NO_POSE") { t.pushFrame(Long.MIN_VALUE, frame(0).first, frame(0).second) }
+        val base = 9_000_000_000_000_000_000L
+        // 1 ns apart: equal as double seconds, distinct as nanoseconds.
+        assertEquals(PushStatus.ACCEPTED, frame(1).let { t.pushFrame(base, it.first, it.second) })
+        assertEquals(PushStatus.ACCEPTED, frame(2).let { t.pushFrame(base + 1, it.first, it.second) })
+        val e = assertThrows<IllegalArgumentException>("9000000000000000001 ns") {
+            frame(3).let { t.pushFrame(base + 1, it.first, it.second) }
+        }
+        assertTrue("${e.message}", e.message!!.contains("not after"))
+        t.flush()
+        assertEquals(2L, t.stats().framesTracked)
+        assertTrue(t.getPose(FloatArray(16)) != Tracker.NO_POSE)
+    }
+
     @Test fun useAfterCloseAndDoubleClose() {
         val t = Tracker(config())
         t.close()
@@ -364,6 +380,75 @@ class NativeBridgeTest {
             assertThrows<IllegalStateException> { NativeBridge.nativeStats(bad) }
             assertThrows<IllegalStateException> { NativeBridge.nativePointCloud(bad, 1) }
         }
+    }
+
+    // --- memory known at init, plausible intrinsics, the real minimum size ---------------
+
+    private fun needed(w: Int, h: Int, live: Boolean = true, cloud: Boolean = false, fx: Double = 0.8 * maxOf(w, h)) =
+        NativeBridge.nativeMemoryNeeded(w, h, fx, fx, (w - 1) / 2.0, (h - 1) / 2.0, 0, 1000.0, 0, 1, 2, live, 2, cloud)
+
+    private fun initSize(w: Int, h: Int) =
+        NativeBridge.nativeInit(w, h, 0.8 * maxOf(w, h), 0.8 * maxOf(w, h), (w - 1) / 2.0, (h - 1) / 2.0, 0, 1000.0, 0, 1, 2, true, 2, false)
+
+    @Test fun memoryIsKnownBeforeInitAndInitRefusesAboveTheBudget() {
+        val small = needed(320, 180)
+        val vga = needed(640, 480)
+        assertTrue("320x180 needs $small", small in (8L shl 20)..(64L shl 20))
+        assertTrue("640x480 needs $vga, more than 320x180's $small", vga > 3 * small)
+        assertTrue(needed(320, 180, cloud = true) > small)
+        // The default budget (512 MiB) refuses 4096x4096 at init, naming need and budget.
+        val big = needed(4096, 4096)
+        assertTrue(big > (512L shl 20))
+        val e = assertThrows<IllegalArgumentException>("512.0 MB") { initSize(4096, 4096) }
+        assertTrue("${e.message}", e.message!!.contains("%.1f MB".format(big / 1048576.0)))
+        // The budget is settable; it applies to trackers created afterwards.
+        val old = NativeBridge.nativeSetMemoryBudget(small - 1)
+        try {
+            assertEquals(512L shl 20, old)
+            assertThrows<IllegalArgumentException>("budget") { initSize(320, 180) }
+            NativeBridge.nativeSetMemoryBudget(small)
+            NativeBridge.nativeRelease(initSize(320, 180))
+            assertThrows<IllegalArgumentException>("memoryBudget") { NativeBridge.nativeSetMemoryBudget(0) }
+            assertThrows<IllegalArgumentException>("memoryBudget") { NativeBridge.nativeSetMemoryBudget(-5) }
+        } finally {
+            NativeBridge.nativeSetMemoryBudget(old)
+        }
+        // Bad settings are refused by the cost query as by init.
+        assertThrows<IllegalArgumentException>("fx") { needed(320, 180, fx = -250.0) }
+        assertThrows<IllegalArgumentException>("width") { needed(0, 180) }
+    }
+
+    @Test fun implausibleIntrinsicsAreRefusedAtInitAndInSetIntrinsics() {
+        assertThrows<IllegalArgumentException>("fx") { Tracker(config().copy(fx = -250.0)) }
+        assertThrows<IllegalArgumentException>("fx") { Tracker(config().copy(fx = 1e-5)) }
+        assertThrows<IllegalArgumentException>("fy") { Tracker(config().copy(fy = 1e300)) }
+        assertThrows<IllegalArgumentException>("cx") { Tracker(config().copy(cx = 1e9)) }
+        assertThrows<IllegalArgumentException>("cy") { Tracker(config().copy(cy = -1e9)) }
+        assertThrows<IllegalArgumentException>("depthScale") {
+            Tracker(config().copy(depthFormat = DepthFormat.CUSTOM_SCALE, depthScale = 4.9e-324))
+        }
+        // An ICL-NUIM-like flipped y axis stays accepted.
+        Tracker(config().copy(fy = -250.0)).close()
+        Tracker(config()).use { t ->
+            assertThrows<IllegalArgumentException>("cx") { t.setIntrinsics(250.0, 250.0, 900.0, 89.5) }
+            assertThrows<IllegalArgumentException>("fx") { t.setIntrinsics(-250.0, 250.0, 159.5, 89.5) }
+            assertThrows<IllegalArgumentException>("fx") { t.setIntrinsics(1e-5, 250.0, 159.5, 89.5) }
+            t.setIntrinsics(260.0, 260.0, 159.5, 89.5)
+        }
+    }
+
+    @Test fun everySizeFromTheDocumentedMinimumInitialises() {
+        for ((w, h) in listOf(8 to 8, 64 to 48, 96 to 72, 8192 to 8, 8 to 8192)) {
+            val handle = initSize(w, h)
+            try {
+                val n = w * h
+                assertEquals(0, NativeBridge.nativePushArrays(handle, 1_000_000L, ShortArray(n) { 1000 }, ByteArray(n) { (it % 251).toByte() }))
+                NativeBridge.nativeFlush(handle)
+            } finally {
+                NativeBridge.nativeRelease(handle)
+            }
+        }
+        assertThrows<IllegalArgumentException>("8x8") { initSize(7, 8) }
     }
 
     @Test fun intrinsicsChangeOrAreRefusedWithIllegalArgument(): Unit = Tracker(config()).use { t ->

@@ -70,4 +70,18 @@ internal object NativeBridge {
 
     /** Releases the tracker; idempotent on the Kotlin side, which zeroes the handle first. */
     @JvmStatic external fun nativeRelease(handle: Long)
+
+    /**
+     * The bytes [nativeInit] with the same arguments would allocate, computed without
+     * allocating; init refuses (IllegalArgumentException naming both) above the budget.
+     */
+    @JvmStatic external fun nativeMemoryNeeded(
+        width: Int, height: Int,
+        fx: Double, fy: Double, cx: Double, cy: Double,
+        depthFormat: Int, depthScale: Double, minConfidence: Int,
+        preset: Int, mode: Int, live: Boolean, threads: Int, pointCloud: Boolean,
+    ): Long
+
+    /** Sets the memory budget (bytes, > 0; default 512 MiB) of the trackers created from now on; returns the previous one. */
+    @JvmStatic external fun nativeSetMemoryBudget(bytes: Long): Long
 }

@@ -151,6 +151,8 @@ class TrackerApiTest {
             "nativeStats" to listOf(J),
             "nativePointCloud" to listOf(J, I),
             "nativeRelease" to listOf(J),
+            "nativeMemoryNeeded" to listOf(I, I, D, D, D, D, I, D, I, I, I, java.lang.Boolean.TYPE, I, java.lang.Boolean.TYPE),
+            "nativeSetMemoryBudget" to listOf(J),
         )
         assertEquals(expected.keys, natives.keys)
         for ((name, params) in expected) {

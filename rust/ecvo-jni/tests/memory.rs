@@ -1,0 +1,215 @@
+//! Memory given back: a counting global allocator (bytes outstanding: allocated minus
+//! freed) around the trackers the natives create and release, through the same code
+//! paths (`ecvo_jni::handles`, what `nativeInit`, `nativePushArrays` and
+//! `nativeRelease` call). If the bytes outstanding return to the baseline, what
+//! `RSS` keeps after release is the allocator's retention (glibc keeping freed pages),
+//! not a leak. Also: `init` allocates no more than `nativeMemoryNeeded` says.
+//!
+//! A tracker the Kotlin side drops without `close` is released by its `Cleaner`,
+//! which calls `nativeRelease` (checked on a real JVM by `NativeBridgeTest`'s
+//! `aTrackerLeftToTheGarbageCollectorIsReleased`); here that is a release from
+//! another thread, in any order, of trackers that were left running.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use ecvo_jni::InitArgs;
+use ecvo_jni::handles::{flush, live_trackers, open, push, release};
+
+struct Counting;
+
+static CURRENT: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+fn grow(n: usize) {
+    let now = CURRENT.fetch_add(n, Ordering::Relaxed) + n;
+    PEAK.fetch_max(now, Ordering::Relaxed);
+}
+
+// SAFETY: every method forwards its arguments unchanged to `System`, which upholds
+// the `GlobalAlloc` contract; the bookkeeping is atomics only and cannot re-enter the
+// allocator.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: the caller's `layout` contract is passed on to `System` as is.
+        let p = unsafe { System.alloc(layout) };
+        if !p.is_null() {
+            grow(layout.size());
+        }
+        p
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: as for `alloc`.
+        let p = unsafe { System.alloc_zeroed(layout) };
+        if !p.is_null() {
+            grow(layout.size());
+        }
+        p
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        // SAFETY: `ptr` was allocated by `System` with `layout`, as the caller
+        // guarantees.
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        if !p.is_null() {
+            grow(new_size);
+            CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
+        }
+        p
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: as for `realloc`.
+        unsafe { System.dealloc(ptr, layout) };
+        CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// One process-wide counter and registry: one test at a time.
+static SERIAL: Mutex<()> = Mutex::new(());
+
+/// Bytes a released tracker may leave behind: the logger's and thread-locals' odd
+/// bytes, nothing of a frame's size (a 320x180 frame is 172 kB raw).
+const SLACK: isize = 64 << 10;
+
+fn args(w: i32, h: i32, point_cloud: bool) -> InitArgs {
+    let f = 0.8 * w.max(h) as f64;
+    InitArgs {
+        width: w,
+        height: h,
+        fx: f,
+        fy: f,
+        cx: (w as f64 - 1.0) / 2.0,
+        cy: (h as f64 - 1.0) / 2.0,
+        depth_format: 0,
+        depth_scale: 1000.0,
+        min_confidence: 0,
+        preset: 1,
+        mode: 2,
+        live: true,
+        threads: 2,
+        point_cloud,
+    }
+}
+
+fn frame(w: usize, h: usize, k: usize) -> (Vec<u16>, Vec<u8>) {
+    let depth = (0..w * h)
+        .map(|i| 900 + ((i * 7 + k) % 300) as u16)
+        .collect();
+    let gray = (0..w * h).map(|i| ((i * 13 + k * 3) % 251) as u8).collect();
+    (depth, gray)
+}
+
+fn outstanding_since(base: usize) -> isize {
+    CURRENT.load(Ordering::Relaxed) as isize - base as isize
+}
+
+fn open_push(a: &InitArgs, frames: usize) -> i64 {
+    let h = open(a).expect("a valid tracker");
+    let (w, hh) = (a.width as usize, a.height as usize);
+    for k in 0..frames {
+        let (d, g) = frame(w, hh, k);
+        push(h, 1_000_000 + k as i64 * 33_000_000, &d, &g).expect("a valid frame");
+    }
+    if frames > 0 {
+        flush(h).expect("flush");
+    }
+    h
+}
+
+#[test]
+fn released_trackers_give_every_byte_back() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let a = args(320, 180, true);
+    // Warm-up: the registry's first node, the logger.
+    release(open_push(&a, 2));
+
+    // One tracker, with frames.
+    let base = CURRENT.load(Ordering::Relaxed);
+    PEAK.store(base, Ordering::Relaxed);
+    let h = open_push(&a, 5);
+    let held = outstanding_since(base);
+    release(h);
+    let peak = PEAK.load(Ordering::Relaxed) - base;
+    let need = a.memory_needed().unwrap();
+    println!(
+        "one 320x180 tracker: {held} bytes while open, peak {peak}, need {need}, left {}",
+        outstanding_since(base)
+    );
+    assert!(held > 1 << 20, "a tracker holds its buffers: {held}");
+    assert!(
+        peak <= need,
+        "init and frames allocated {peak}, over the {need} announced"
+    );
+    assert!(
+        outstanding_since(base).abs() < SLACK,
+        "{} bytes left",
+        outstanding_since(base)
+    );
+
+    // 1,000 opened and released one after another (every 10th with a frame).
+    let base = CURRENT.load(Ordering::Relaxed);
+    for i in 0..1000 {
+        release(open_push(&a, usize::from(i % 10 == 0)));
+    }
+    println!(
+        "1,000 opened and released: {} bytes left",
+        outstanding_since(base)
+    );
+    assert!(
+        outstanding_since(base).abs() < SLACK,
+        "{} bytes left",
+        outstanding_since(base)
+    );
+    assert_eq!(live_trackers(), 0);
+
+    // Rounds of trackers left running, then released from another thread in
+    // reverse order, as the Cleaner does with trackers dropped without close.
+    // crossbeam-epoch (under rayon's deques) frees retired blocks lazily, when some
+    // thread next pins an epoch, so a few tens of kB may lag behind a round; a leak
+    // would grow with every round instead.
+    let base = CURRENT.load(Ordering::Relaxed);
+    let mut left = Vec::new();
+    for round in 0..12 {
+        let handles: Vec<i64> = (0..8).map(|_| open_push(&a, 1)).collect();
+        assert_eq!(live_trackers(), 8);
+        std::thread::spawn(move || handles.into_iter().rev().for_each(release))
+            .join()
+            .unwrap();
+        left.push(outstanding_since(base));
+        println!(
+            "round {round} of 8 dropped trackers: {} bytes left",
+            outstanding_since(base)
+        );
+    }
+    let worst = left.iter().map(|b| b.abs()).max().unwrap();
+    assert!(worst < 4 * SLACK, "{left:?}: bytes not given back");
+    // No growth: the last rounds leave no more than the first ones did.
+    let early = left[..4].iter().map(|b| b.abs()).max().unwrap();
+    let late = left[8..].iter().map(|b| b.abs()).max().unwrap();
+    assert!(late <= early + SLACK, "{left:?}: grows round after round");
+    assert_eq!(live_trackers(), 0);
+}
+
+#[test]
+fn init_refuses_above_the_budget_before_allocating() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let a = args(4096, 4096, false);
+    let need = a.memory_needed().unwrap();
+    assert!(need > ecvo_core::DEFAULT_MEMORY_BUDGET);
+    let base = CURRENT.load(Ordering::Relaxed);
+    PEAK.store(base, Ordering::Relaxed);
+    match open(&a) {
+        Err(ecvo_jni::Failure::IllegalArgument(m)) => {
+            assert!(m.contains("512.0 MB") && m.contains("budget"), "{m}");
+        }
+        other => panic!("4096x4096 gave {other:?}"),
+    }
+    assert!(
+        PEAK.load(Ordering::Relaxed) - base < 1 << 20,
+        "allocated before refusing"
+    );
+    assert_eq!(live_trackers(), 0);
+}
