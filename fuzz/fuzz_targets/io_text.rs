@@ -1,6 +1,7 @@
 //! The text parsers of ecvo-io: camera.json, TUM image lists, ICL-NUIM
-//! associations.txt, TUM trajectories, and the nearest-timestamp association of two
-//! image lists. The first byte picks the parser.
+//! associations.txt, TUM trajectories, the nearest-timestamp association of two
+//! image lists, and how messages show hostile text (`ecvo_io::files::shown`). The
+//! first byte picks the parser.
 #![no_main]
 
 use std::path::Path;
@@ -17,7 +18,7 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     let path = Path::new("fuzz.txt");
-    match which % 5 {
+    match which % 6 {
         0 => {
             if let Ok(c) = parse_camera_json(text, path) {
                 // What the parser accepts, the core accepts.
@@ -31,6 +32,20 @@ fuzz_target!(|data: &[u8]| {
                     assert!(w[0].timestamp < w[1].timestamp);
                 }
                 assert!(list.iter().all(|e| e.timestamp.is_finite()));
+                // Accepted entries stay inside the list's folder.
+                for e in &list {
+                    let p = Path::new(&e.file);
+                    assert!(!p.is_absolute(), "{:?}", e.file);
+                    let mut depth = 0i64;
+                    for c in p.components() {
+                        match c {
+                            std::path::Component::ParentDir => depth -= 1,
+                            std::path::Component::Normal(_) => depth += 1,
+                            _ => {}
+                        }
+                        assert!(depth >= 0, "{:?}", e.file);
+                    }
+                }
             }
         }
         2 => {
@@ -59,6 +74,12 @@ fuzz_target!(|data: &[u8]| {
                 assert!(!used[j]);
                 used[j] = true;
             }
+        }
+        5 => {
+            // Messages: no control character survives, and the length is bounded.
+            let s = ecvo_io::files::shown(text);
+            assert!(!s.chars().any(|c| c.is_control()));
+            assert!(s.chars().count() <= ecvo_io::files::MAX_SHOWN_CHARS + 40);
         }
         _ => {
             if let Ok(t) = Trajectory::parse_tum(text, path) {

@@ -125,6 +125,11 @@ def main():
     write("io_text", "associations.txt", b"\x02" + assoc.encode())
     gt = (synth / "groundtruth.txt").read_text().splitlines()[:12]
     write("io_text", "groundtruth.txt", b"\x03" + "\n".join(gt).encode())
+    # Hostile text in messages (control bytes, a BOM, a long name), and lists that lead
+    # out of the folder or start with a BOM.
+    write("io_text", "shown", b"\x05" + "a\x00b\n\x1b[31m\ufeff".encode() + b"x" * 400)
+    write("io_text", "list_escape", b"\x01" + b"1 ../outside.png\n2 /etc/passwd\n")
+    write("io_text", "list_bom", b"\x01" + "\ufeff1 rgb/1.png\n".encode())
 
     # --- --levels
     for k, s in enumerate(["30mm:7deg,120mm:12deg", "0.03m:3deg,70mm:7deg", "none", "", " 1e-3 m : 1.5e1 deg "]):

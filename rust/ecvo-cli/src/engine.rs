@@ -35,6 +35,37 @@ const PREFETCH: usize = 4;
 /// (a dozen or so); the margin keeps the tracker from ever waiting on it.
 const OUTPUT_QUEUE: usize = 1024;
 
+const MIB: usize = 1 << 20;
+
+/// The pipeline as the CLI runs it.
+fn pipeline_options(threads: usize) -> PipelineOptions {
+    PipelineOptions {
+        threads,
+        admission: Admission::Offline,
+        geometry: None,
+        keep_trajectory: false,
+        output_queue: Some(OUTPUT_QUEUE),
+        ..PipelineOptions::default()
+    }
+}
+
+/// What the reader allocates: the decoded frames waiting (`PREFETCH`, one being
+/// decoded, one pushed, one kept for the cloud per frame in flight, counted as two)
+/// at 3 bytes a pixel, and the decoder's scratch (8 bytes a pixel at most, 16-bit
+/// RGBA) on the reader thread.
+fn reader_bytes(config: &Config) -> usize {
+    let n = config.camera.pixels();
+    (PREFETCH + 4) * 3 * n + 8 * n
+}
+
+/// Bytes a run of `config` with `threads` allocates for frames: the pipeline's
+/// estimate ([`Pipeline::memory_needed`]) plus the reader's ([`reader_bytes`]). Not
+/// counted: the poses and outputs kept (about 200 bytes a frame) and the point
+/// cloud (the cloud frames' points, 28 bytes each).
+pub fn memory_needed(config: &Config, threads: usize) -> usize {
+    Pipeline::memory_needed(config, &pipeline_options(threads)) + reader_bytes(config)
+}
+
 /// Which frames contribute their points to the point cloud.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CloudFrames {
@@ -69,6 +100,38 @@ pub struct EngineOptions {
     pub cloud: CloudFrames,
     /// Take every `cloud_stride`-th pixel in each direction for the cloud.
     pub cloud_stride: usize,
+    /// Make a skipped frame (repeated, or its timestamp not after the previous one)
+    /// an error instead of a warning.
+    pub strict: bool,
+}
+
+/// Frames of the stream that were read but not tracked, or tracked without depth.
+#[derive(Clone, Debug, Default)]
+pub struct Skips {
+    /// Frames bit-identical to the previous one (positions in the stream).
+    pub repeated: Vec<usize>,
+    /// Frames whose timestamp was not after the previous frame's.
+    pub timestamp_not_increasing: Vec<usize>,
+    /// Frames with no depth pixel in the filter's range (tracked, but lost unless
+    /// the tracker can register them on intensity alone, which it does not).
+    pub no_valid_depth: Vec<usize>,
+}
+
+/// The stream frames checked for valid depth with an immediate warning.
+const EARLY_DEPTH_FRAMES: usize = 5;
+
+/// Raw depth values that the filter stage keeps: non-zero and within the filter's
+/// depth range at the camera's depth scale.
+fn valid_raw_depth(config: &Config) -> (u16, u16) {
+    let s = config.camera.depth_scale;
+    let lo = (config.filter.min_depth_m * s).ceil().max(1.0);
+    let hi = (config.filter.max_depth_m * s)
+        .floor()
+        .min(f64::from(u16::MAX));
+    if !(lo <= hi) {
+        return (1, 0);
+    }
+    (lo as u16, hi as u16)
 }
 
 /// Points of one frame in its camera's coordinates, as [`PreparedFrame::for_each_point`]
@@ -105,6 +168,8 @@ pub struct TrackRun {
     pub wall_s: f64,
     /// Compute threads the pipeline used.
     pub threads: usize,
+    /// Frames not tracked, or tracked without depth.
+    pub skips: Skips,
 }
 
 /// The calling thread's side of a run: frames waiting for their output, and what
@@ -175,18 +240,23 @@ pub fn track_sequence(
     config: &Config,
     opts: &EngineOptions,
 ) -> Result<TrackRun> {
-    let pipeline = Pipeline::new(
-        config.clone(),
-        PipelineOptions {
-            threads: opts.threads,
-            admission: Admission::Offline,
-            geometry: None,
-            keep_trajectory: false,
-            output_queue: Some(OUTPUT_QUEUE),
-            ..PipelineOptions::default()
-        },
-    )
-    .context("invalid tracker configuration")?;
+    let options = pipeline_options(opts.threads);
+    let need = memory_needed(config, opts.threads);
+    if need > config.memory_budget {
+        let c = &config.camera;
+        bail!(
+            "{}x{} frames need {} MiB (the tracking pipeline {} MiB, frames decoded ahead {} \
+             MiB), more than the memory budget of {} MiB (--max-memory)",
+            c.width,
+            c.height,
+            need.div_ceil(MIB),
+            Pipeline::memory_needed(config, &options).div_ceil(MIB),
+            reader_bytes(config).div_ceil(MIB),
+            config.memory_budget / MIB
+        );
+    }
+    let pipeline =
+        Pipeline::new(config.clone(), options).context("invalid tracker configuration")?;
     let rx = pipeline
         .outputs()
         .context("the pipeline has no output channel")?;
@@ -218,23 +288,52 @@ pub fn track_sequence(
         cloud_ms: Vec::new(),
         bar: &bar,
     };
+    let mut skips = Skips::default();
+    let (lo, hi) = valid_raw_depth(config);
+    let mut warned_depth = false;
     let mut reader = sequence.reader(Some(n), PREFETCH);
     // Not a `for` loop: the reader is also used inside to recycle frames.
     #[allow(clippy::while_let_on_iterator)]
     while let Some(item) = reader.next() {
         let frame = item.with_context(|| format!("reading {}", sequence.dir().display()))?;
         let what = || format!("frame {} (timestamp {})", frame.index, frame.timestamp);
+        if !frame.depth.iter().any(|&d| d >= lo && d <= hi) {
+            skips.no_valid_depth.push(frame.index);
+            if frame.index < EARLY_DEPTH_FRAMES && !warned_depth {
+                warned_depth = true;
+                let c = &config.camera;
+                log::warn!(
+                    "{}: no valid depth pixel (every raw value is 0 or outside {}..={}, which \
+                     is {} to {} m at depth_scale {}); without depth the frames are lost: is \
+                     depth_scale right?",
+                    what(),
+                    lo,
+                    hi,
+                    config.filter.min_depth_m,
+                    config.filter.max_depth_m,
+                    c.depth_scale
+                );
+            }
+        }
         match pipeline.push_view(frame.view()) {
             Ok(PushStatus::Repeated) => {
                 // Bit-identical to the previous frame: not tracked (counted in the
                 // pipeline's statistics).
+                if opts.strict {
+                    bail!("{}: identical to the previous frame (--strict)", what());
+                }
                 log::warn!("{}: identical to the previous frame, skipped", what());
+                skips.repeated.push(frame.index);
                 reader.recycle(frame);
                 continue;
             }
             Ok(_) => {}
             Err(e @ ecvo_pipeline::Error::TimestampNotIncreasing { .. }) => {
+                if opts.strict {
+                    bail!("{}: {e} (--strict)", what());
+                }
                 log::warn!("{}: {e}; skipped", what());
+                skips.timestamp_not_increasing.push(frame.index);
                 reader.recycle(frame);
                 continue;
             }
@@ -279,6 +378,7 @@ pub fn track_sequence(
         clouds: c.clouds,
         wall_s: start.elapsed().as_secs_f64(),
         threads: opts.threads,
+        skips,
     })
 }
 
@@ -294,4 +394,61 @@ fn frame_points(frame: &PreparedFrame, index: u64, stride: usize) -> FramePoints
         fp.intensity.push(i);
     });
     fp
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ecvo_core::{Camera, Mode, Preset};
+
+    fn config(width: usize, height: usize) -> Config {
+        let camera = Camera {
+            width,
+            height,
+            fx: 0.8 * width as f64,
+            fy: 0.8 * width as f64,
+            cx: (width as f64 - 1.0) / 2.0,
+            cy: (height as f64 - 1.0) / 2.0,
+            depth_scale: 5000.0,
+        };
+        Config::new(camera, Preset::Pc, Mode::L2)
+    }
+
+    /// The largest frame of the aspect `w:h` (a multiple of it) within the default
+    /// budget with `threads`.
+    fn largest(w: usize, h: usize, threads: usize) -> (usize, usize) {
+        let mut k = 1;
+        while {
+            let c = config(w * (k + 1), h * (k + 1));
+            c.camera.width <= 8192 && memory_needed(&c, threads) <= c.memory_budget
+        } {
+            k += 1;
+        }
+        (w * k, h * k)
+    }
+
+    #[test]
+    fn default_budget_fits_vga_and_refuses_the_largest_camera() {
+        for threads in [1, 2] {
+            let vga = config(640, 480);
+            let need = memory_needed(&vga, threads);
+            println!("{threads} thread(s): 640x480 needs {} MiB", need >> 20);
+            assert!(need < vga.memory_budget / 2, "{need}");
+            let big = config(8192, 8192);
+            assert!(memory_needed(&big, threads) > big.memory_budget);
+            // The reader's share is counted on top of the pipeline's.
+            assert!(
+                memory_needed(&vga, threads)
+                    > Pipeline::memory_needed(&vga, &pipeline_options(threads))
+            );
+            let (w, h) = largest(16, 9, threads);
+            let (w4, h4) = largest(4, 3, threads);
+            // Printed for the README (`cargo test -p ecvo-cli -- --nocapture budget`).
+            println!(
+                "{threads} thread(s): largest 16:9 frame {w}x{h}, 4:3 {w4}x{h4} within {} MiB",
+                vga.memory_budget >> 20
+            );
+            assert!((1024..8192).contains(&w), "{w}x{h}");
+        }
+    }
 }

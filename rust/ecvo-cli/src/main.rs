@@ -24,6 +24,7 @@ use anyhow::Result;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use ecvo_core::{DepthNoiseModel, Mode, MotionPrior, Preset, Weighting};
 use ecvo_io::Trajectory;
+use ecvo_io::files::shown_path;
 use serde_json::json;
 
 use crate::plot::Plane;
@@ -40,12 +41,83 @@ use crate::synth::{Motion, Noise, Size};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// More messages on stderr: -v for progress notes, -vv for debugging (RUST_LOG,
+    /// e.g. `RUST_LOG=ecvo_io=debug`, overrides both flags).
+    #[arg(short, long, action = clap::ArgAction::Count, global = true)]
+    verbose: u8,
+    /// Only errors on stderr (the frame account still appears when a frame was
+    /// skipped or lost).
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    quiet: bool,
+}
+
+/// Set by `-q`.
+static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Prints the one-line account of a run's frames on stderr: as a warning when a frame
+/// was skipped or lost, else as a note (left out with -q).
+pub(crate) fn report_account(line: &str, loss: bool) {
+    if loss {
+        eprintln!("warning: {}", printable(line));
+    } else if !QUIET.load(std::sync::atomic::Ordering::Relaxed) {
+        eprintln!("{}", printable(line));
+    }
+}
+
+/// A message as stderr shows it: control characters escaped, at most 4,000
+/// characters (paths inside are already shortened by ecvo-io).
+fn printable(text: &str) -> String {
+    const MAX: usize = 4000;
+    let mut out = String::with_capacity(text.len().min(MAX + 16));
+    for (n, c) in text.chars().enumerate() {
+        if n == MAX {
+            out.push_str("…[cut]");
+            break;
+        }
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// The logger: `warning: ...` lines on stderr, at warn level by default, info with
+/// -v, debug with -vv, trace with -vvv, errors only with -q; `RUST_LOG` overrides.
+fn init_logger(verbose: u8, quiet: bool) {
+    use std::io::Write as _;
+    let level = match (quiet, verbose) {
+        (true, _) => log::LevelFilter::Error,
+        (false, 0) => log::LevelFilter::Warn,
+        (false, 1) => log::LevelFilter::Info,
+        (false, 2) => log::LevelFilter::Debug,
+        _ => log::LevelFilter::Trace,
+    };
+    let mut builder = env_logger::Builder::new();
+    builder.filter_level(level);
+    if let Ok(spec) = std::env::var("RUST_LOG") {
+        builder.parse_filters(&spec);
+    }
+    builder.format(|buf, record| {
+        let prefix = match record.level() {
+            log::Level::Error => "error: ",
+            log::Level::Warn => "warning: ",
+            log::Level::Info => "",
+            log::Level::Debug | log::Level::Trace => "debug: ",
+        };
+        writeln!(buf, "{prefix}{}", printable(&record.args().to_string()))
+    });
+    builder.target(env_logger::Target::Stderr);
+    let _ = builder.try_init();
 }
 
 #[derive(Subcommand)]
 enum Command {
-    /// Track a sequence and write trajectory.txt, references.txt, summary.json,
-    /// cloud.ply and trajectory.svg into --out.
+    /// Track a sequence and write trajectory.txt (TUM poses), states.txt (the
+    /// tracker's word on each frame), references.txt, summary.json (settings,
+    /// counters, errors, times, the frame account), cloud.ply and trajectory.svg
+    /// into --out.
     Run {
         /// Sequence folder (TUM layout with camera.json, or ICL-NUIM).
         seq: PathBuf,
@@ -98,8 +170,9 @@ enum Command {
         seqs: Vec<PathBuf>,
         #[command(flatten)]
         track: TrackArgs,
-        /// Frame steps to run each sequence at, e.g. 1,2,3,4 (overrides --frame-step).
-        #[arg(long, value_delimiter = ',')]
+        /// Frame steps to run each sequence at, e.g. 1,2,3,4 (overrides --frame-step;
+        /// each 1 to 1000).
+        #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=1000))]
         frame_steps: Vec<u32>,
         /// Also write every row as JSON lines to this file.
         #[arg(long)]
@@ -229,6 +302,46 @@ struct TrackArgs {
     /// 0: off, as --paper does).
     #[arg(long)]
     refine_every: Option<u32>,
+    /// Make any skipped frame an error: a list entry without a partner within
+    /// 0.02 s, a frame identical to the previous one, a timestamp not after the
+    /// previous one (by default each is a warning, counted in the frame account).
+    #[arg(long)]
+    strict: bool,
+    /// Read list entries that lead outside the sequence folder (absolute paths, `..`,
+    /// symlinks out); refused by default.
+    #[arg(long)]
+    allow_outside: bool,
+    /// Memory the run may allocate for frames (the engine's pools, pyramids and
+    /// templates plus the frames decoded ahead), e.g. 512M, 2G or a number of bytes;
+    /// a larger need is refused before anything is allocated. Default 512M (the
+    /// engine's default budget, sized for a phone).
+    #[arg(long, value_parser = parse_bytes)]
+    max_memory: Option<usize>,
+}
+
+/// `512M`, `2G`, `64MiB`, `1048576`: a size in bytes (K, M, G are powers of 1024).
+fn parse_bytes(text: &str) -> std::result::Result<usize, String> {
+    let t = text.trim();
+    let digits = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (num, unit) = t.split_at(digits);
+    let value: f64 = num
+        .parse()
+        .map_err(|_| format!("`{text}` is not a size (e.g. 512M, 2G)"))?;
+    let unit = unit.trim().to_ascii_uppercase();
+    let scale = match unit.trim_end_matches("IB").trim_end_matches('B') {
+        "" => 1.0,
+        "K" => 1024.0,
+        "M" => 1024.0 * 1024.0,
+        "G" => 1024.0 * 1024.0 * 1024.0,
+        _ => return Err(format!("`{text}`: unknown unit (use K, M or G)")),
+    };
+    let bytes = value * scale;
+    if !(1.0..1e18).contains(&bytes) {
+        return Err(format!("`{text}` is not a usable size"));
+    }
+    Ok(bytes as usize)
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -311,16 +424,21 @@ impl TrackArgs {
             camera: self.camera.clone(),
             max_frames: self.max_frames,
             threads: self.threads as usize,
+            strict: self.strict,
+            allow_outside: self.allow_outside,
+            max_memory: self.max_memory,
         }
     }
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    init_logger(cli.verbose, cli.quiet);
+    QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
     match dispatch(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", message(&e));
+            eprintln!("error: {}", printable(&message(&e)));
             ExitCode::FAILURE
         }
     }
@@ -361,8 +479,8 @@ fn dispatch(command: Command) -> Result<()> {
                 ModeArg::L2 => Mode::L2,
             };
             if no_bilateral && !no_contour_filter && matches!(track.preset, PresetArg::Phone) {
-                eprintln!(
-                    "warning: --no-bilateral with the phone preset's contour filter (20°): on \
+                log::warn!(
+                    "--no-bilateral with the phone preset's contour filter (20°): on \
                      raw depth the contour test reads the noise as depth edges and removes nearly \
                      every pixel (frames lost as failed_toofewpixels); add --no-contour-filter"
                 );
@@ -392,7 +510,7 @@ fn dispatch(command: Command) -> Result<()> {
             let steps: Vec<usize> = if frame_steps.is_empty() {
                 vec![track.frame_step as usize]
             } else {
-                frame_steps.iter().map(|&s| s.max(1) as usize).collect()
+                frame_steps.iter().map(|&s| s as usize).collect()
             };
             table::table_command(&seqs, &track.settings(Mode::L2), &steps, json.as_deref())
         }
@@ -430,17 +548,22 @@ fn dispatch(command: Command) -> Result<()> {
 fn eval_command(gt_path: &Path, est_path: &Path, as_json: bool) -> Result<()> {
     let gt = Trajectory::read_tum(gt_path)?;
     let est = Trajectory::read_tum(est_path)?;
-    // ATE is what eval is for: its failure (no overlap in time) is an error.
+    // ATE is what eval is for: its failure (no overlap in time, values too large
+    // to score) is an error.
     let ate = ecvo_io::eval::ate(&gt, &est).map_err(|e| {
-        anyhow::anyhow!("{} against {}: {e}", est_path.display(), gt_path.display())
+        anyhow::anyhow!(
+            "{} against {}: {e}",
+            shown_path(est_path),
+            shown_path(gt_path)
+        )
     })?;
     let mut eval = Evaluation::new(&gt, &est);
     eval.ate = Some(ate.clone());
     let a = &ate;
     if as_json {
         let v = json!({
-            "groundtruth": gt_path.display().to_string(),
-            "estimate": est_path.display().to_string(),
+            "groundtruth": gt_path.to_string_lossy(),
+            "estimate": est_path.to_string_lossy(),
             "ate_rmse_m": a.rmse,
             "ate": eval.ate_json(),
             "rpe": eval.rpe_json(),
@@ -448,21 +571,22 @@ fn eval_command(gt_path: &Path, est_path: &Path, as_json: bool) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         println!(
-            "ATE RMSE: {:.4} m (mean {:.4}, median {:.4}, max {:.4}; {} poses)",
+            "ATE RMSE (absolute trajectory error after rigid alignment): {:.4} m (mean {:.4}, median {:.4}, max {:.4}); {} poses",
             a.rmse, a.mean, a.median, a.max, a.count
         );
         match &eval.rpe_s {
             Some(r) => println!(
-                "RPE over 1 s: {:.4} m/s, {:.3} deg/s (RMSE, {} pairs)",
+                "RPE over 1 s (drift), RMSE: {:.4} m/s, {:.3} deg/s; {} pairs",
                 r.trans.rmse, r.rot_deg.rmse, r.trans.count
             ),
-            None => println!("RPE over 1 s: n/a (the trajectories are too short)"),
+            None => println!("RPE over 1 s: n/a (no pair of poses 1 s apart could be scored)"),
         }
-        if let Some(r) = &eval.rpe_frame {
-            println!(
-                "RPE per frame: {:.5} m, {:.4} deg (RMSE, {} pairs)",
+        match &eval.rpe_frame {
+            Some(r) => println!(
+                "RPE per frame (consecutive poses), RMSE: {:.5} m, {:.4} deg; {} pairs",
                 r.trans.rmse, r.rot_deg.rmse, r.trans.count
-            );
+            ),
+            None => println!("RPE per frame: n/a (no consecutive poses could be scored)"),
         }
     }
     Ok(())

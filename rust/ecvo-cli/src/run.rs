@@ -27,25 +27,48 @@ pub struct Evaluation {
     pub rpe_s: Option<RpeResult>,
     /// Relative pose error between consecutive frames.
     pub rpe_frame: Option<RpeResult>,
+    /// Why there is no ATE (no ground truth, or what the evaluation refused).
+    pub ate_missing: Option<String>,
 }
 
 impl Evaluation {
     /// Compares `est` with `gt`; an error (too few associated poses) leaves a field
     /// empty and is logged.
     pub fn new(gt: &Trajectory, est: &Trajectory) -> Evaluation {
-        fn keep<T>(what: &str, r: ecvo_io::Result<T>) -> Option<T> {
+        // A missing ATE is a warning (the run has ground truth); a missing RPE only a
+        // note (short runs have no pair of poses 1 s apart).
+        fn keep<T>(what: &str, r: ecvo_io::Result<T>, level: log::Level) -> Option<T> {
             match r {
                 Ok(v) => Some(v),
                 Err(e) => {
-                    log::warn!("{what}: {e}");
+                    log::log!(level, "{what}: {e}");
                     None
                 }
             }
         }
+        let ate = ecvo_io::eval::ate(gt, est);
+        let ate_missing = ate.as_ref().err().map(|e| e.to_string());
         Evaluation {
-            ate: keep("ATE", ecvo_io::eval::ate(gt, est)),
-            rpe_s: keep("RPE over 1 s", ecvo_io::eval::rpe(gt, est, 1.0)),
-            rpe_frame: keep("RPE per frame", ecvo_io::eval::rpe_per_frame(gt, est)),
+            ate: keep("ATE against the ground truth", ate, log::Level::Warn),
+            rpe_s: keep(
+                "RPE over 1 s",
+                ecvo_io::eval::rpe(gt, est, 1.0),
+                log::Level::Info,
+            ),
+            rpe_frame: keep(
+                "RPE per frame",
+                ecvo_io::eval::rpe_per_frame(gt, est),
+                log::Level::Info,
+            ),
+            ate_missing,
+        }
+    }
+
+    /// No ground truth to compare with.
+    pub fn without_ground_truth() -> Evaluation {
+        Evaluation {
+            ate_missing: Some("the sequence has no ground truth".into()),
+            ..Evaluation::default()
         }
     }
 
@@ -158,6 +181,7 @@ pub fn track(
         progress: std::io::stderr().is_terminal(),
         cloud,
         cloud_stride,
+        strict: settings.strict,
     };
     let run = track_sequence(&sequence, &config, &opts)?;
     if run.outputs.is_empty() {
@@ -169,7 +193,7 @@ pub fn track(
     }
     let eval = match sequence.groundtruth() {
         Some(gt) => Evaluation::new(gt, &trajectory),
-        None => Evaluation::default(),
+        None => Evaluation::without_ground_truth(),
     };
     Ok(Tracked {
         sequence,
@@ -225,6 +249,8 @@ pub fn run_command(seq: &Path, settings: &TrackSettings, outs: &RunOutputs) -> R
     )
     .with_context(|| format!("writing {}", svg.display()))?;
 
+    let (line, _) = account(&t, settings);
+    crate::report_account(&line, account_has_loss(&t));
     let stages = StageStats::of(&t.run);
     let summary = summary_json(seq, settings, &t, &stages, outs, cloud_points);
     let summary_path = out.join("summary.json");
@@ -234,6 +260,111 @@ pub fn run_command(seq: &Path, settings: &TrackSettings, outs: &RunOutputs) -> R
 
     print!("{}", human_summary(seq, &t, &stages, out));
     Ok(())
+}
+
+/// Why a frame was lost, as `states.txt` spells [A]'s outcome.
+fn lost_reason(o: &ecvo_core::FrameOutput) -> String {
+    match &o.frame_to_frame {
+        None => "no frame-to-frame estimate".into(),
+        Some(r) => match r.status {
+            Status::Failed(f) => format!("failed_{f:?}").to_lowercase(),
+            _ => "registration not believed (implausible motion or spread jump)".into(),
+        },
+    }
+}
+
+/// What became of the frames the lists held: one line for stderr and the
+/// `frames_account` object of summary.json.
+pub fn account(t: &Tracked, settings: &TrackSettings) -> (String, serde_json::Value) {
+    let l = t.sequence.listing();
+    let skips = &t.run.skips;
+    let read = t.run.outputs.len() + skips.repeated.len() + skips.timestamp_not_increasing.len();
+    let not_read = t.sequence.len().saturating_sub(read);
+    let mut lost: std::collections::BTreeMap<String, usize> = Default::default();
+    for o in t
+        .run
+        .outputs
+        .iter()
+        .filter(|o| o.state == TrackingState::Lost)
+    {
+        *lost.entry(lost_reason(o)).or_default() += 1;
+    }
+    let lost_total: usize = lost.values().sum();
+    let listed = match t.sequence.layout() {
+        ecvo_io::Layout::Tum => format!(
+            "listed {} colour + {} depth, paired {}",
+            l.rgb_listed, l.depth_listed, l.paired
+        ),
+        ecvo_io::Layout::IclNuim => format!("listed {} in associations.txt", l.paired),
+    };
+    let mut line = format!("frames: {listed}");
+    if l.unpaired_rgb + l.unpaired_depth > 0 {
+        let _ = write!(
+            line,
+            " (skipped unpaired: {} colour, {} depth)",
+            l.unpaired_rgb, l.unpaired_depth
+        );
+    }
+    if l.stepped_over > 0 {
+        let _ = write!(
+            line,
+            ", {} left out by --frame-step {}",
+            l.stepped_over, settings.frame_step
+        );
+    }
+    if not_read > 0 {
+        let _ = write!(line, ", {not_read} not read (--max-frames)");
+    }
+    let skipped = skips.repeated.len() + skips.timestamp_not_increasing.len();
+    let _ = write!(line, ", read {read}, skipped {skipped}");
+    if skipped > 0 {
+        let _ = write!(
+            line,
+            " ({} identical to the previous frame, {} with a timestamp not after the previous one)",
+            skips.repeated.len(),
+            skips.timestamp_not_increasing.len()
+        );
+    }
+    let _ = write!(line, ", tracked {}, lost {lost_total}", t.run.outputs.len());
+    if lost_total > 0 {
+        let reasons: Vec<String> = lost.iter().map(|(r, n)| format!("{n} {r}")).collect();
+        let _ = write!(line, " ({})", reasons.join(", "));
+    }
+    if !skips.no_valid_depth.is_empty() {
+        let _ = write!(
+            line,
+            ", {} without a valid depth pixel",
+            skips.no_valid_depth.len()
+        );
+    }
+    let json = json!({
+        "rgb_listed": l.rgb_listed,
+        "depth_listed": l.depth_listed,
+        "paired": l.paired,
+        "unpaired_rgb_skipped": l.unpaired_rgb,
+        "unpaired_depth_skipped": l.unpaired_depth,
+        "left_out_by_frame_step": l.stepped_over,
+        "not_read_max_frames": not_read,
+        "read": read,
+        "skipped_repeated": skips.repeated,
+        "skipped_timestamp_not_increasing": skips.timestamp_not_increasing,
+        "tracked": t.run.outputs.len(),
+        "lost": lost_total,
+        "lost_reasons": lost,
+        "no_valid_depth": skips.no_valid_depth,
+    });
+    (line, json)
+}
+
+/// Whether anything was skipped or lost (then the account is printed even with -q).
+pub fn account_has_loss(t: &Tracked) -> bool {
+    let l = t.sequence.listing();
+    let s = &t.run.skips;
+    l.unpaired_rgb + l.unpaired_depth > 0
+        || !s.repeated.is_empty()
+        || !s.timestamp_not_increasing.is_empty()
+        || !s.no_valid_depth.is_empty()
+        || t.run.counters.lost_frames > 0
 }
 
 fn summary_json(
@@ -286,7 +417,7 @@ fn summary_json(
         "spread_jumps": c.spread_jumps,
         "frame_step": settings.frame_step,
         "engine": settings.engine.describe(&t.config),
-        "ground_truth": t.sequence.groundtruth().is_some(),
+        "ground_truth": t.eval.ate.is_some(),
         "ate_rmse_m": t.eval.ate.as_ref().map(|a| a.rmse),
         "ate": t.eval.ate_json(),
         "rpe": t.eval.rpe_json(),
@@ -309,6 +440,13 @@ fn summary_json(
     summary["simd"] = json!(ecvo_core::simd_path());
     summary["refinements"] = json!(c.refinements);
     summary["refused_refinements"] = json!(c.refused_refinements);
+    summary["frames_account"] = account(t, settings).1;
+    // `ground_truth` means an ATE was computed; these say whether the sequence had a
+    // ground-truth file and, if no ATE, why.
+    summary["ground_truth_file"] = json!(t.sequence.groundtruth().is_some());
+    summary["ate_missing"] = json!(t.eval.ate_missing);
+    summary["allow_outside"] = json!(settings.allow_outside);
+    summary["strict"] = json!(settings.strict);
     summary
 }
 
@@ -358,24 +496,35 @@ fn human_summary(seq: &Path, t: &Tracked, s: &StageStats, out: &Path) -> String 
     );
     match &t.eval.ate {
         Some(a) => {
-            let _ = writeln!(r, "ATE RMSE: {:.4} m ({} poses)", a.rmse, a.count);
+            let _ = writeln!(
+                r,
+                "ATE RMSE (absolute trajectory error after rigid alignment): {:.4} m over {} poses",
+                a.rmse, a.count
+            );
         }
         None => {
-            let _ = writeln!(r, "ATE RMSE: n/a (no ground truth)");
+            let why = t.eval.ate_missing.as_deref().unwrap_or("not computed");
+            let _ = writeln!(r, "ATE RMSE: n/a ({why})");
         }
     }
     if let Some(p) = &t.eval.rpe_s {
         let _ = writeln!(
             r,
-            "RPE: {:.4} m/s, {:.3} deg/s",
+            "RPE RMSE over 1 s (drift): {:.4} m/s, {:.3} deg/s",
             p.trans.rmse, p.rot_deg.rmse
         );
     }
     let refs: Vec<String> = c.references.iter().map(|n| n.to_string()).collect();
+    let levels: Vec<String> = (1..=refs.len()).map(|k| format!("L{k}")).collect();
     let _ = writeln!(
         r,
-        "motion estimations: {}, references: {}, lost frames: {}",
+        "motion estimations (MOTION calls): {}, reference frames chosen per level ({}): {}, lost frames: {}",
         c.motion_estimations,
+        if levels.is_empty() {
+            "none".to_string()
+        } else {
+            levels.join("/")
+        },
         if refs.is_empty() {
             "-".to_string()
         } else {
@@ -383,9 +532,18 @@ fn human_summary(seq: &Path, t: &Tracked, s: &StageStats, out: &Path) -> String 
         },
         c.lost_frames
     );
+    let ahead = if t.run.stats.ahead_computed > 0 {
+        format!(
+            " (the filter stage also computed [A] for {} of {} frames; that time is in \
+             its figure, not the tracker's)",
+            t.run.stats.ahead_computed, t.run.stats.tracked
+        )
+    } else {
+        String::new()
+    };
     let _ = writeln!(
         r,
-        "ms/frame (median/mean): filter {:.2}/{:.2}, tracker {:.2}/{:.2}, total {:.2}/{:.2}",
+        "stage time, ms per frame (median/mean): filter {:.2}/{:.2}, tracker {:.2}/{:.2}, sum {:.2}/{:.2}{ahead}",
         s.filter.median,
         s.filter.mean,
         s.tracker.median,
@@ -395,7 +553,7 @@ fn human_summary(seq: &Path, t: &Tracked, s: &StageStats, out: &Path) -> String 
     );
     let _ = writeln!(
         r,
-        "wall: {:.2} ms/frame with {} thread(s) ({:.1} frames/s)",
+        "wall time: {:.2} ms per frame with {} thread(s) ({:.1} frames/s)",
         t.run.stats.wall_ms_per_frame,
         t.run.threads,
         if t.run.stats.wall_ms_per_frame > 0.0 {

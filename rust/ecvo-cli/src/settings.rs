@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use ecvo_core::config::parse_levels;
 use ecvo_core::{Camera, Config, Mode, Preset, ReferenceLevel, Schedule};
-use ecvo_io::Sequence;
+use ecvo_io::files::shown_path;
+use ecvo_io::{OpenOptions, Sequence};
 
 /// Everything that decides how a sequence is tracked.
 #[derive(Clone, Debug)]
@@ -33,6 +34,13 @@ pub struct TrackSettings {
     pub frame_step: usize,
     /// Which engine settings, beyond the preset's thresholds.
     pub engine: EngineChoice,
+    /// Any skipped frame (unpaired list entry, repeated frame, timestamp not after
+    /// the previous one) is an error.
+    pub strict: bool,
+    /// Read list entries that lead outside the sequence folder.
+    pub allow_outside: bool,
+    /// The memory budget in bytes (`None`: the engine's default).
+    pub max_memory: Option<usize>,
 }
 
 /// The engine's method: ecvo's defaults, or the paper's as written, with single
@@ -157,16 +165,29 @@ pub fn levels_string(levels: &[ReferenceLevel]) -> String {
 }
 
 impl TrackSettings {
-    /// Opens the sequence, with the `--camera` file if one was given.
+    /// Opens the sequence, with the `--camera` file if one was given; with
+    /// `--strict`, a list entry left unpaired is an error.
     pub fn open_sequence(&self, seq: &Path) -> Result<Sequence> {
         let camera = match &self.camera {
             Some(path) => Some(
                 ecvo_io::load_camera_json(path)
-                    .with_context(|| format!("--camera {}", path.display()))?,
+                    .with_context(|| format!("--camera {}", shown_path(path)))?,
             ),
             None => None,
         };
-        Ok(Sequence::open(seq, camera)?.every_nth(self.frame_step))
+        let options = OpenOptions::new().allow_outside(self.allow_outside);
+        let sequence = Sequence::open_with(seq, camera, &options)?;
+        let l = sequence.listing();
+        if self.strict && (l.unpaired_rgb > 0 || l.unpaired_depth > 0) {
+            bail!(
+                "{}: {} colour and {} depth entries have no partner within {} s (--strict)",
+                shown_path(seq),
+                l.unpaired_rgb,
+                l.unpaired_depth,
+                ecvo_io::sequence::MAX_RGB_DEPTH_DT
+            );
+        }
+        Ok(sequence.every_nth(self.frame_step))
     }
 
     /// The tracker configuration for `camera`.
@@ -248,6 +269,9 @@ impl TrackSettings {
         }
         if !self.contour_filter {
             config.filter.contour_angle_deg = None;
+        }
+        if let Some(b) = self.max_memory {
+            config.memory_budget = b;
         }
         config.validate().context("invalid tracker configuration")?;
         Ok(config)

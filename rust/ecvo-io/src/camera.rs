@@ -12,6 +12,7 @@ use ecvo_core::Camera;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::files::{MAX_CAMERA_BYTES, read_text_limited, shown};
 
 /// Name of the camera file inside a sequence folder.
 pub const CAMERA_FILE: &str = "camera.json";
@@ -57,11 +58,31 @@ impl From<CameraFile> for Camera {
 }
 
 /// Parses a camera from JSON text; `path` is only used in error messages.
+///
+/// The text must be one JSON object (a leading byte-order mark is ignored) with every
+/// field of [`Camera`]; the camera must pass `Camera::validate`.
 pub fn parse_camera_json(text: &str, path: &Path) -> Result<Camera> {
-    let file: CameraFile = serde_json::from_str(text).map_err(|e| Error::Camera {
+    let bad = |msg: String| Error::Camera {
         path: path.to_path_buf(),
-        msg: e.to_string(),
-    })?;
+        msg,
+    };
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let value: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| bad(shown(&e.to_string())))?;
+    if !value.is_object() {
+        let kind = match value {
+            serde_json::Value::Array(_) => "an array",
+            serde_json::Value::String(_) => "a string",
+            serde_json::Value::Number(_) => "a number",
+            serde_json::Value::Bool(_) => "a boolean",
+            _ => "null",
+        };
+        return Err(bad(format!(
+            "expected a JSON object {{\"width\": .., \"height\": .., \"fx\": .., \"fy\": .., \
+             \"cx\": .., \"cy\": .., \"depth_scale\": ..}}, found {kind}"
+        )));
+    }
+    let file: CameraFile = serde_json::from_value(value).map_err(|e| bad(shown(&e.to_string())))?;
     let camera = Camera::from(file);
     camera.validate().map_err(|e| Error::Camera {
         path: path.to_path_buf(),
@@ -70,10 +91,11 @@ pub fn parse_camera_json(text: &str, path: &Path) -> Result<Camera> {
     Ok(camera)
 }
 
-/// Reads and validates a `camera.json` file; errors name the file and the bad field.
+/// Reads and validates a `camera.json` file (a regular file of at most
+/// [`MAX_CAMERA_BYTES`]); errors name the file and the bad field.
 pub fn load_camera_json(path: impl AsRef<Path>) -> Result<Camera> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = read_text_limited(path, MAX_CAMERA_BYTES)?;
     parse_camera_json(&text, path)
 }
 
@@ -232,5 +254,24 @@ mod tests {
         let nan = ok.replace("516.5", "NaN");
         let msg = parse_camera_json(&nan, p).unwrap_err().to_string();
         assert!(msg.contains("/some/where/camera.json"), "{msg}");
+        // Too large for a double: serde_json refuses it, never reads it as inf.
+        let inf = ok.replace("516.5", "1e400");
+        let msg = parse_camera_json(&inf, p).unwrap_err().to_string();
+        assert!(msg.contains("/some/where/camera.json"), "{msg}");
+
+        // An array is not read by position.
+        let arr = "[640, 480, 517.3, 516.5, 318.6, 255.3, 5000.0]";
+        let msg = parse_camera_json(arr, p).unwrap_err().to_string();
+        assert!(
+            msg.contains("JSON object") && msg.contains("an array"),
+            "{msg}"
+        );
+
+        // A byte-order mark is accepted.
+        let bom = format!("\u{feff}{ok}");
+        assert_eq!(
+            parse_camera_json(&bom, p).unwrap(),
+            CameraPreset::TumFr1.camera()
+        );
     }
 }

@@ -46,9 +46,13 @@ pub fn dataset(name: &str) -> Option<PathBuf> {
     datasets_dir().map(|d| d.join(name)).filter(|p| p.is_dir())
 }
 
-/// For tests: the dataset folder `name`, or `None` after printing (to stderr) that the
-/// test is skipped. Panics instead if `ECVO_REQUIRE_DATASETS=1`, so that CI cannot pass by
-/// skipping.
+/// For tests: the dataset folder `name`, or `None` after telling the user that the
+/// test did not run. Panics instead if `ECVO_REQUIRE_DATASETS=1`, so that CI cannot
+/// pass by skipping.
+///
+/// The notice goes straight to the process's stderr, not through `eprintln!`, which
+/// the test harness captures (and shows only for failed tests): `cargo test` prints
+/// `NOT RUN (no data): <test>: ...` among its results, where a user sees it.
 pub fn dataset_for_test(name: &str) -> Option<PathBuf> {
     if let Some(p) = dataset(name) {
         return Some(p);
@@ -61,6 +65,14 @@ pub fn dataset_for_test(name: &str) -> Option<PathBuf> {
     if required {
         panic!("{msg}, and {REQUIRE_DATASETS_ENV}=1");
     }
-    eprintln!("SKIPPING: {msg}");
+    let test = std::thread::current()
+        .name()
+        .filter(|n| *n != "main")
+        .map(|n| format!("{n}: "))
+        .unwrap_or_default();
+    let line =
+        format!("\nNOT RUN (no data): {test}{msg}; the test passes without checking anything\n");
+    // An uncaptured write: libtest's capture only redirects the print macros.
+    let _ = std::io::Write::write_all(&mut std::io::stderr().lock(), line.as_bytes());
     None
 }

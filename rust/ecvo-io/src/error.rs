@@ -4,6 +4,8 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use crate::files::shown_path;
+
 /// Anything that can go wrong while reading or writing ecvo's files.
 ///
 /// Messages always name the file involved and, for text files, the line number.
@@ -11,7 +13,7 @@ use std::path::{Path, PathBuf};
 #[non_exhaustive]
 pub enum Error {
     /// A file or folder could not be opened, read, created or written.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {source}", shown_path(path))]
     Io {
         /// The file or folder.
         path: PathBuf,
@@ -20,7 +22,7 @@ pub enum Error {
         source: std::io::Error,
     },
     /// A line of a text file (list, trajectory, associations) could not be parsed.
-    #[error("{}:{line}: {msg}", path.display())]
+    #[error("{}:{line}: {msg}", shown_path(path))]
     Parse {
         /// The text file.
         path: PathBuf,
@@ -33,7 +35,7 @@ pub enum Error {
     #[error(
         "{}:{line}: timestamp {timestamp} is not after the previous one ({previous}); \
          timestamps must be strictly increasing",
-        path.display()
+        shown_path(path)
     )]
     NonMonotonic {
         /// The text file.
@@ -46,7 +48,7 @@ pub enum Error {
         previous: f64,
     },
     /// A PNG could not be decoded or encoded, or has the wrong bit depth or colour type.
-    #[error("{}: {msg}", path.display())]
+    #[error("{}: {msg}", shown_path(path))]
     Image {
         /// The PNG file.
         path: PathBuf,
@@ -56,7 +58,7 @@ pub enum Error {
     /// A PNG does not have the size of the camera.
     #[error(
         "{}: image is {width}x{height} but the camera is {expected_width}x{expected_height}",
-        path.display()
+        shown_path(path)
     )]
     ImageSize {
         /// The PNG file.
@@ -71,7 +73,7 @@ pub enum Error {
         expected_height: usize,
     },
     /// A camera file is malformed, misses a field, or holds unusable intrinsics.
-    #[error("{}: invalid camera: {msg}", path.display())]
+    #[error("{}: invalid camera: {msg}", shown_path(path))]
     Camera {
         /// The camera file.
         path: PathBuf,
@@ -82,7 +84,7 @@ pub enum Error {
     #[error(
         "{}: no camera.json in the sequence folder; pass a camera (a camera.json file \
          or a preset such as fr1, fr2, fr3, icl)",
-        dir.display()
+        shown_path(dir)
     )]
     MissingCamera {
         /// The sequence folder.
@@ -91,14 +93,14 @@ pub enum Error {
     /// A folder is neither a TUM RGB-D sequence nor an ICL-NUIM (TUM-style) one.
     #[error(
         "{}: not a sequence folder (expected rgb.txt and depth.txt, or associations.txt)",
-        dir.display()
+        shown_path(dir)
     )]
     UnknownLayout {
         /// The folder.
         dir: PathBuf,
     },
     /// A sequence has no usable frame (for example no depth/colour pair within 0.02 s).
-    #[error("{}: {msg}", dir.display())]
+    #[error("{}: {msg}", shown_path(dir))]
     EmptySequence {
         /// The sequence folder.
         dir: PathBuf,
@@ -123,6 +125,42 @@ pub enum Error {
         found: usize,
         /// Pairs needed.
         needed: usize,
+    },
+    /// An input is not a regular file (a named pipe, a device, a folder): refused
+    /// before it is opened, so that it cannot block or feed the reader forever.
+    #[error(
+        "{}: is {kind}; expected a regular file (or a symlink to one)",
+        shown_path(path)
+    )]
+    NotRegularFile {
+        /// The path.
+        path: PathBuf,
+        /// What it is instead.
+        kind: &'static str,
+    },
+    /// An input file is larger than the reader's limit for its kind.
+    #[error(
+        "{}: larger than the limit of {limit} bytes for this kind of file",
+        shown_path(path)
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// The limit in bytes.
+        limit: u64,
+    },
+    /// A file named by a sequence's list resolves (through a symlink) to a place
+    /// outside the sequence folder.
+    #[error(
+        "{}: resolves outside the sequence folder {}; refused (--allow-outside to read it anyway)",
+        shown_path(path),
+        shown_path(dir)
+    )]
+    OutsideSequence {
+        /// The file as the list names it.
+        path: PathBuf,
+        /// The sequence folder (canonical).
+        dir: PathBuf,
     },
     /// An argument is unusable (buffer of the wrong size, non-finite value, unknown name).
     #[error("{0}")]
@@ -169,7 +207,10 @@ impl Error {
             | Error::NonMonotonic { path, .. }
             | Error::Image { path, .. }
             | Error::ImageSize { path, .. }
-            | Error::Camera { path, .. } => Some(path),
+            | Error::Camera { path, .. }
+            | Error::NotRegularFile { path, .. }
+            | Error::TooLarge { path, .. }
+            | Error::OutsideSequence { path, .. } => Some(path),
             Error::MissingCamera { dir }
             | Error::UnknownLayout { dir }
             | Error::EmptySequence { dir, .. } => Some(dir),

@@ -69,6 +69,20 @@ impl ErrorStats {
     }
 }
 
+/// Refuses statistics that are not finite: the inputs were finite, but their
+/// magnitudes overflowed a sum (a score of NaN or infinity means nothing).
+fn check_finite(what: &str, s: &ErrorStats) -> Result<()> {
+    let all = [s.rmse, s.mean, s.median, s.std, s.min, s.max];
+    if all.iter().all(|v| v.is_finite()) {
+        return Ok(());
+    }
+    Err(Error::InvalidInput(format!(
+        "{what} cannot be scored: its statistics overflow (RMSE {}, max {}); the \
+         trajectories' values are too large",
+        s.rmse, s.max
+    )))
+}
+
 /// The rigid motion `T` (rotation and translation, no scale) minimising
 /// `sum |dst_i - T src_i|^2`, in closed form (Umeyama 1991 / Horn 1987): SVD of the
 /// cross-covariance, with the sign of the smallest singular direction flipped when
@@ -210,6 +224,7 @@ pub fn ate_with_max_dt(gt: &Trajectory, est: &Trajectory, max_dt: f64) -> Result
         found: 0,
         needed: 3,
     })?;
+    check_finite("ATE", &s)?;
     Ok(AteResult {
         rmse: s.rmse,
         mean: s.mean,
@@ -281,6 +296,8 @@ fn rpe_result(
     ) else {
         return Err(too_few);
     };
+    check_finite("RPE (translation)", &trans)?;
+    check_finite("RPE (rotation)", &rot_deg)?;
     Ok(RpeResult {
         delta,
         trans,

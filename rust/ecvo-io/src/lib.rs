@@ -12,11 +12,17 @@
 //! - [`datasets_dir`]: where the shared test datasets are.
 //!
 //! Errors ([`Error`]) always name the file and, for text files, the line.
+//!
+//! Input is treated as hostile ([`files`]): every file read is a regular file (or a
+//! symlink to one) within a size limit, PNGs decode with bounded memory, and the
+//! files a sequence's lists name must lie inside its folder unless
+//! [`OpenOptions::allow_outside`].
 
 pub mod camera;
 pub mod datasets;
 pub mod error;
 pub mod eval;
+pub mod files;
 mod list;
 pub mod ply;
 pub mod png;
@@ -28,10 +34,13 @@ pub mod writer;
 pub use camera::{CameraPreset, load_camera_json, save_camera_json};
 pub use datasets::{dataset, dataset_for_test, datasets_dir};
 pub use error::{Error, Result};
-pub use list::{ListEntry, associate_stamps, parse_image_list};
+pub use list::{ListEntry, associate_stamps, parse_image_list, parse_image_list_with};
 pub use ply::write_ply;
 pub use reader::FrameReader;
-pub use sequence::{Frame, FrameInfo, Layout, Sequence, parse_associations};
+pub use sequence::{
+    Frame, FrameInfo, Layout, Listing, OpenOptions, Sequence, parse_associations,
+    parse_associations_with,
+};
 pub use trajectory::Trajectory;
 pub use writer::SequenceWriter;
 

@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use crate::error::{Error, Result};
+use crate::files::{MAX_TEXT_BYTES, join_entry, read_text_limited, shown};
 
 /// One non-empty, non-comment line of a text file.
 pub(crate) struct Record<'a> {
@@ -13,13 +14,16 @@ pub(crate) struct Record<'a> {
     pub fields: Vec<&'a str>,
 }
 
-/// Reads a whole text file, naming it in the error.
+/// Reads a whole text file (a regular file of at most [`MAX_TEXT_BYTES`], a leading
+/// byte-order mark dropped), naming it in the error.
 pub(crate) fn read_text(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|e| Error::io(path, e))
+    read_text_limited(path, MAX_TEXT_BYTES)
 }
 
-/// The data lines of `text`: blank lines and lines starting with `#` are skipped.
+/// The data lines of `text`: blank lines and lines starting with `#` are skipped; a
+/// leading byte-order mark is ignored.
 pub(crate) fn records(text: &str) -> impl Iterator<Item = Record<'_>> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     text.lines().enumerate().filter_map(|(i, l)| {
         let t = l.trim();
         if t.is_empty() || t.starts_with('#') {
@@ -40,12 +44,12 @@ pub(crate) fn parse_f64(path: &Path, line: usize, what: &str, s: &str) -> Result
         Ok(v) => Err(Error::parse(
             path,
             line,
-            format!("{what} `{s}` is not finite ({v})"),
+            format!("{what} `{}` is not finite ({v})", shown(s)),
         )),
         Err(_) => Err(Error::parse(
             path,
             line,
-            format!("{what} `{s}` is not a number"),
+            format!("{what} `{}` is not a number", shown(s)),
         )),
     }
 }
@@ -84,14 +88,26 @@ pub struct ListEntry {
 }
 
 /// Reads a TUM image list (`rgb.txt`, `depth.txt`): `timestamp filename` per line,
-/// `#` comments and blank lines allowed, timestamps strictly increasing.
-pub(crate) fn read_image_list(path: &Path) -> Result<Vec<ListEntry>> {
-    parse_image_list(&read_text(path)?, path)
+/// `#` comments and blank lines allowed, timestamps strictly increasing; file names
+/// inside the list's folder unless `allow_outside`.
+pub(crate) fn read_image_list(path: &Path, allow_outside: bool) -> Result<Vec<ListEntry>> {
+    parse_image_list_with(&read_text(path)?, path, allow_outside)
 }
 
 /// Parses the text of a TUM image list (see `read_image_list`); `path` is only used
-/// in error messages.
+/// in error messages. A file name that is absolute or climbs out of the list's
+/// folder with `..` is an error naming the line.
 pub fn parse_image_list(text: &str, path: &Path) -> Result<Vec<ListEntry>> {
+    parse_image_list_with(text, path, false)
+}
+
+/// [`parse_image_list`], accepting file names outside the list's folder if
+/// `allow_outside`.
+pub fn parse_image_list_with(
+    text: &str,
+    path: &Path,
+    allow_outside: bool,
+) -> Result<Vec<ListEntry>> {
     let mut out = Vec::new();
     let mut mono = Monotonic::default();
     for r in records(text) {
@@ -107,6 +123,7 @@ pub fn parse_image_list(text: &str, path: &Path) -> Result<Vec<ListEntry>> {
         }
         let timestamp = parse_f64(path, r.line, "timestamp", r.fields[0])?;
         mono.check(path, r.line, timestamp)?;
+        join_entry(Path::new(""), path, r.line, r.fields[1], allow_outside)?;
         out.push(ListEntry {
             timestamp,
             file: r.fields[1].to_string(),

@@ -6,10 +6,11 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Cursor, Seek, Write};
 use std::path::Path;
 
-use image::codecs::png::{CompressionType, FilterType, PngDecoder, PngEncoder};
-use image::{ColorType, ExtendedColorType, ImageDecoder, ImageEncoder};
+use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+use image::{ExtendedColorType, ImageEncoder};
 
 use crate::error::{Error, Result};
+use crate::files::open_regular;
 
 thread_local! {
     /// Per-thread scratch bytes for colour and 16-bit decoding, so that decoding into
@@ -17,60 +18,112 @@ thread_local! {
     static SCRATCH: RefCell<Vec<u8>> = const { RefCell::new(Vec::new()) };
 }
 
-fn describe(c: ColorType) -> &'static str {
-    match c {
-        ColorType::L8 => "8-bit gray",
-        ColorType::La8 => "8-bit gray with alpha",
-        ColorType::Rgb8 => "8-bit RGB",
-        ColorType::Rgba8 => "8-bit RGBA",
-        ColorType::L16 => "16-bit gray",
-        ColorType::La16 => "16-bit gray with alpha",
-        ColorType::Rgb16 => "16-bit RGB",
-        ColorType::Rgba16 => "16-bit RGBA",
-        _ => "an unsupported colour type",
+/// What the PNG decoder may allocate besides the frame itself (which is sized from
+/// the camera, checked against the header first): the chunks it keeps (palette,
+/// transparency, `eXIf`) and its row buffers. Colour profiles (`iCCP`) and text
+/// chunks (`tEXt`, `zTXt`, `iTXt`) are never inflated, so a compressed bomb in them
+/// costs nothing.
+pub const MAX_PNG_CHUNK_BYTES: usize = 1 << 20;
+
+/// Largest PNG file read for a `width` x `height` frame: 16 MiB plus 10 bytes a pixel
+/// (an uncompressed 16-bit RGBA frame with its filter bytes fits), so that a file
+/// padded with gigabytes of skipped chunks is refused instead of read through.
+pub fn max_png_file_bytes(width: usize, height: usize) -> u64 {
+    (16u64 << 20).saturating_add(
+        (width as u64)
+            .saturating_mul(height as u64)
+            .saturating_mul(10),
+    )
+}
+
+type Reader<R> = png::Reader<R>;
+
+fn describe(ct: png::ColorType, bits: png::BitDepth) -> String {
+    let bits = match bits {
+        png::BitDepth::One => 1,
+        png::BitDepth::Two => 2,
+        png::BitDepth::Four => 4,
+        png::BitDepth::Eight => 8,
+        png::BitDepth::Sixteen => 16,
+    };
+    let what = match ct {
+        png::ColorType::Grayscale => "gray",
+        png::ColorType::GrayscaleAlpha => "gray with alpha",
+        png::ColorType::Rgb => "RGB",
+        png::ColorType::Rgba => "RGBA",
+        png::ColorType::Indexed => "indexed colour",
+    };
+    format!("{bits}-bit {what}")
+}
+
+fn decode_err(path: &Path, e: png::DecodingError) -> Error {
+    match e {
+        png::DecodingError::LimitsExceeded => Error::image(
+            path,
+            format!(
+                "cannot decode PNG: it needs more than the decoder's limit of \
+                 {MAX_PNG_CHUNK_BYTES} bytes besides the frame (an oversized chunk?)"
+            ),
+        ),
+        e => Error::image(path, format!("cannot decode PNG: {e}")),
     }
 }
 
-fn open(path: &Path) -> Result<PngDecoder<BufReader<File>>> {
-    let file = File::open(path).map_err(|e| Error::io(path, e))?;
-    decoder(BufReader::new(file), path)
+/// A decoder with the limits above, not yet past the header.
+fn decoder<R: BufRead + Seek>(reader: R, width_hint: usize) -> png::Decoder<R> {
+    // Two rows of the widest sample layout (16-bit RGBA plus the filter byte) for the
+    // row buffers, on top of the chunk allowance.
+    let rows = 2usize.saturating_mul(width_hint.saturating_mul(8).saturating_add(1));
+    let mut dec = png::Decoder::new_with_limits(
+        reader,
+        png::Limits {
+            bytes: MAX_PNG_CHUNK_BYTES.saturating_add(rows),
+        },
+    );
+    dec.set_ignore_iccp_chunk(true);
+    dec.set_ignore_text_chunk(true);
+    dec.set_transformations(png::Transformations::EXPAND);
+    dec
 }
 
-fn decoder<R: BufRead + Seek>(reader: R, path: &Path) -> Result<PngDecoder<R>> {
-    PngDecoder::new(reader).map_err(|e| Error::image(path, format!("cannot decode PNG: {e}")))
+fn open_file(path: &Path, limit: u64) -> Result<BufReader<File>> {
+    Ok(BufReader::new(open_regular(path, limit)?))
 }
 
-fn check_size<R: BufRead + Seek>(
-    path: &Path,
-    dec: &PngDecoder<R>,
-    w: usize,
-    h: usize,
-) -> Result<()> {
-    let (fw, fh) = dec.dimensions();
-    if (fw as usize, fh as usize) != (w, h) {
+/// Width and height from the header, without reading further.
+fn header_size<R: BufRead + Seek>(reader: R, path: &Path) -> Result<(usize, usize)> {
+    let mut dec = decoder(reader, 0);
+    let info = dec.read_header_info().map_err(|e| decode_err(path, e))?;
+    Ok((info.width as usize, info.height as usize))
+}
+
+/// Checks the header's size against the camera's, then reads up to the image data.
+fn start<R: BufRead + Seek>(reader: R, path: &Path, w: usize, h: usize) -> Result<Reader<R>> {
+    let mut dec = decoder(reader, w);
+    let info = dec.read_header_info().map_err(|e| decode_err(path, e))?;
+    let (fw, fh) = (info.width as usize, info.height as usize);
+    if (fw, fh) != (w, h) {
         return Err(Error::ImageSize {
             path: path.to_path_buf(),
-            width: fw as usize,
-            height: fh as usize,
+            width: fw,
+            height: fh,
             expected_width: w,
             expected_height: h,
         });
     }
-    Ok(())
+    dec.read_info().map_err(|e| decode_err(path, e))
 }
 
 /// Width and height of a PNG, from its header only.
 pub fn png_size(path: impl AsRef<Path>) -> Result<(usize, usize)> {
     let path = path.as_ref();
-    let (w, h) = open(path)?.dimensions();
-    Ok((w as usize, h as usize))
+    header_size(open_file(path, u64::MAX)?, path)
 }
 
 /// Width and height of a PNG held in memory, from its header only; `path` is only
 /// used in error messages.
 pub fn png_size_of(bytes: &[u8], path: &Path) -> Result<(usize, usize)> {
-    let (w, h) = decoder(Cursor::new(bytes), path)?.dimensions();
-    Ok((w as usize, h as usize))
+    header_size(Cursor::new(bytes), path)
 }
 
 /// Gray value of an RGB pixel: `0.299 R + 0.587 G + 0.114 B`, rounded to nearest
@@ -82,8 +135,12 @@ pub fn rgb_to_gray(r: u8, g: u8, b: u8) -> u8 {
 
 /// Decodes an intensity PNG of exactly `width` x `height` into `out` (resized,
 /// allocation reused). 8-bit gray is copied; 8-bit RGB/RGBA is converted with
-/// [`rgb_to_gray`] (8-bit gray+alpha keeps the gray); anything else is an error
-/// naming the file.
+/// [`rgb_to_gray`] (8-bit gray+alpha keeps the gray; palettes and gray below 8 bits
+/// are expanded first); anything else is an error naming the file.
+///
+/// The file must be a regular file of at most [`max_png_file_bytes`]; the decoder
+/// allocates the frame (sized from `width` x `height`, checked against the header
+/// before) and at most [`MAX_PNG_CHUNK_BYTES`] more.
 pub fn read_intensity_png(
     path: impl AsRef<Path>,
     width: usize,
@@ -91,7 +148,8 @@ pub fn read_intensity_png(
     out: &mut Vec<u8>,
 ) -> Result<()> {
     let path = path.as_ref();
-    intensity_from(open(path)?, path, width, height, out)
+    let file = open_file(path, max_png_file_bytes(width, height))?;
+    intensity_from(start(file, path, width, height)?, path, width, height, out)
 }
 
 /// [`read_intensity_png`] on the bytes of a PNG file held in memory; `path` is only
@@ -103,43 +161,68 @@ pub fn decode_intensity_png(
     height: usize,
     out: &mut Vec<u8>,
 ) -> Result<()> {
-    intensity_from(decoder(Cursor::new(bytes), path)?, path, width, height, out)
+    let reader = start(Cursor::new(bytes), path, width, height)?;
+    intensity_from(reader, path, width, height, out)
+}
+
+/// Decodes the frame into `buf` (resized to the decoder's output size, which the
+/// caller has checked).
+fn frame_into<R: BufRead + Seek>(
+    reader: &mut Reader<R>,
+    path: &Path,
+    expected: usize,
+    buf: &mut Vec<u8>,
+) -> Result<()> {
+    let size = reader.output_buffer_size();
+    if size != Some(expected) {
+        return Err(Error::image(
+            path,
+            format!("cannot decode PNG: unexpected output size {size:?}, expected {expected}"),
+        ));
+    }
+    buf.resize(expected, 0);
+    reader.next_frame(buf).map_err(|e| decode_err(path, e))?;
+    Ok(())
 }
 
 fn intensity_from<R: BufRead + Seek>(
-    dec: PngDecoder<R>,
+    mut reader: Reader<R>,
     path: &Path,
     width: usize,
     height: usize,
     out: &mut Vec<u8>,
 ) -> Result<()> {
-    check_size(path, &dec, width, height)?;
     let n = width * height;
-    let ct = dec.color_type();
-    let decode_err = |e: image::ImageError| Error::image(path, format!("cannot decode PNG: {e}"));
+    let (ct, bits) = reader.output_color_type();
+    if bits != png::BitDepth::Eight {
+        return Err(Error::image(
+            path,
+            format!(
+                "intensity PNG is {}; expected 8-bit gray, RGB or RGBA",
+                describe(ct, bits)
+            ),
+        ));
+    }
     match ct {
-        ColorType::L8 => {
-            out.resize(n, 0);
-            dec.read_image(out).map_err(decode_err)
-        }
-        ColorType::La8 | ColorType::Rgb8 | ColorType::Rgba8 => SCRATCH.with(|s| {
-            let mut s = s.borrow_mut();
-            let ch = ct.channel_count() as usize;
-            s.resize(n * ch, 0);
-            dec.read_image(&mut s).map_err(decode_err)?;
-            out.clear();
-            if ch == 2 {
-                out.extend(s.chunks_exact(2).map(|p| p[0]));
-            } else {
-                out.extend(s.chunks_exact(ch).map(|p| rgb_to_gray(p[0], p[1], p[2])));
-            }
-            Ok(())
-        }),
+        png::ColorType::Grayscale => frame_into(&mut reader, path, n, out),
+        png::ColorType::GrayscaleAlpha | png::ColorType::Rgb | png::ColorType::Rgba => SCRATCH
+            .with(|s| {
+                let mut s = s.borrow_mut();
+                let ch = ct.samples();
+                frame_into(&mut reader, path, n * ch, &mut s)?;
+                out.clear();
+                if ch == 2 {
+                    out.extend(s.chunks_exact(2).map(|p| p[0]));
+                } else {
+                    out.extend(s.chunks_exact(ch).map(|p| rgb_to_gray(p[0], p[1], p[2])));
+                }
+                Ok(())
+            }),
         other => Err(Error::image(
             path,
             format!(
                 "intensity PNG is {}; expected 8-bit gray, RGB or RGBA",
-                describe(other)
+                describe(other, bits)
             ),
         )),
     }
@@ -147,6 +230,7 @@ fn intensity_from<R: BufRead + Seek>(
 
 /// Decodes a depth PNG, which must be 16-bit gray of exactly `width` x `height`,
 /// into `out` (resized, allocation reused); anything else is an error naming the file.
+/// The file and memory limits are those of [`read_intensity_png`].
 pub fn read_depth_png(
     path: impl AsRef<Path>,
     width: usize,
@@ -154,7 +238,8 @@ pub fn read_depth_png(
     out: &mut Vec<u16>,
 ) -> Result<()> {
     let path = path.as_ref();
-    depth_from(open(path)?, path, width, height, out)
+    let file = open_file(path, max_png_file_bytes(width, height))?;
+    depth_from(start(file, path, width, height)?, path, width, height, out)
 }
 
 /// [`read_depth_png`] on the bytes of a PNG file held in memory; `path` is only used
@@ -166,33 +251,31 @@ pub fn decode_depth_png(
     height: usize,
     out: &mut Vec<u16>,
 ) -> Result<()> {
-    depth_from(decoder(Cursor::new(bytes), path)?, path, width, height, out)
+    let reader = start(Cursor::new(bytes), path, width, height)?;
+    depth_from(reader, path, width, height, out)
 }
 
 fn depth_from<R: BufRead + Seek>(
-    dec: PngDecoder<R>,
+    mut reader: Reader<R>,
     path: &Path,
     width: usize,
     height: usize,
     out: &mut Vec<u16>,
 ) -> Result<()> {
-    check_size(path, &dec, width, height)?;
-    let ct = dec.color_type();
-    if ct != ColorType::L16 {
+    let (ct, bits) = reader.output_color_type();
+    if (ct, bits) != (png::ColorType::Grayscale, png::BitDepth::Sixteen) {
         return Err(Error::image(
             path,
-            format!("depth PNG is {}; expected 16-bit gray", describe(ct)),
+            format!("depth PNG is {}; expected 16-bit gray", describe(ct, bits)),
         ));
     }
     let n = width * height;
     SCRATCH.with(|s| {
         let mut s = s.borrow_mut();
-        s.resize(2 * n, 0);
-        dec.read_image(&mut s)
-            .map_err(|e| Error::image(path, format!("cannot decode PNG: {e}")))?;
+        frame_into(&mut reader, path, 2 * n, &mut s)?;
         out.clear();
-        // The decoder hands out native-endian samples.
-        out.extend(s.chunks_exact(2).map(|b| u16::from_ne_bytes([b[0], b[1]])));
+        // PNG samples are big-endian.
+        out.extend(s.chunks_exact(2).map(|b| u16::from_be_bytes([b[0], b[1]])));
         Ok(())
     })
 }

@@ -28,6 +28,7 @@ pub struct FrameReader {
 impl FrameReader {
     pub(crate) fn spawn(
         camera: Camera,
+        root: Option<std::path::PathBuf>,
         frames: Arc<[FrameInfo]>,
         count: usize,
         prefetch: usize,
@@ -42,7 +43,8 @@ impl FrameReader {
                     return;
                 }
                 let mut frame = recycle_rx.try_recv().unwrap_or_default();
-                let result = load_into(&camera, &frames[index], index, &mut frame).map(|()| frame);
+                let result = load_into(&camera, root.as_deref(), &frames[index], index, &mut frame)
+                    .map(|()| frame);
                 let failed = result.is_err();
                 if tx.send(result).is_err() || failed {
                     return;

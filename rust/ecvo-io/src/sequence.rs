@@ -8,6 +8,7 @@ use ecvo_core::{Camera, FrameView};
 
 use crate::camera::{CAMERA_FILE, load_camera_json};
 use crate::error::{Error, Result};
+use crate::files::{check_inside, join_entry, shown_path};
 use crate::list::{Monotonic, associate_stamps, parse_f64, read_image_list, read_text, records};
 use crate::png::{png_size, read_depth_png, read_intensity_png};
 use crate::reader::FrameReader;
@@ -66,15 +67,59 @@ impl Frame {
     }
 }
 
+/// How [`Sequence::open_with`] reads a sequence folder.
+#[derive(Clone, Debug, Default)]
+#[non_exhaustive]
+pub struct OpenOptions {
+    /// Read list entries that lead outside the sequence folder (absolute paths, `..`,
+    /// symlinks out). Off by default: a downloaded sequence cannot make the reader
+    /// open other files.
+    pub allow_outside: bool,
+}
+
+impl OpenOptions {
+    /// The defaults: reads stay inside the sequence folder.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Sets [`OpenOptions::allow_outside`].
+    pub fn allow_outside(mut self, allow: bool) -> Self {
+        self.allow_outside = allow;
+        self
+    }
+}
+
+/// What the lists of a sequence held and how much of it became frames.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Listing {
+    /// Entries of `rgb.txt` (TUM) or lines of `associations.txt` (ICL-NUIM).
+    pub rgb_listed: usize,
+    /// Entries of `depth.txt` (TUM) or lines of `associations.txt` (ICL-NUIM).
+    pub depth_listed: usize,
+    /// Colour/depth pairs: the frames of the sequence.
+    pub paired: usize,
+    /// Colour entries with no depth entry within [`MAX_RGB_DEPTH_DT`] (not read).
+    pub unpaired_rgb: usize,
+    /// Depth entries with no colour entry within [`MAX_RGB_DEPTH_DT`] (not read).
+    pub unpaired_depth: usize,
+    /// Frames left out by [`Sequence::every_nth`].
+    pub stepped_over: usize,
+}
+
 /// An opened RGB-D sequence: its camera, frame list and optional ground truth. Frames
 /// are decoded on demand ([`Sequence::load_frame`]) or streamed ([`Sequence::reader`]).
 #[derive(Clone, Debug)]
 pub struct Sequence {
     dir: PathBuf,
+    /// The canonical folder every frame file must resolve into (`None` with
+    /// [`OpenOptions::allow_outside`]).
+    root: Option<PathBuf>,
     layout: Layout,
     camera: Camera,
     frames: Arc<[FrameInfo]>,
     groundtruth: Option<Trajectory>,
+    listing: Listing,
 }
 
 impl Sequence {
@@ -86,8 +131,21 @@ impl Sequence {
     /// and depth images are paired one-to-one by nearest timestamp within
     /// [`MAX_RGB_DEPTH_DT`] as `associate.py` does. Ground truth (`groundtruth.txt`, or
     /// `*.gt.freiburg` for ICL-NUIM) is optional but must parse if present.
+    ///
+    /// Reads stay inside the folder (see [`OpenOptions`]); every file read is a
+    /// regular file within a size limit ([`crate::files`]).
     pub fn open(dir: impl AsRef<Path>, camera_override: Option<Camera>) -> Result<Sequence> {
+        Self::open_with(dir, camera_override, &OpenOptions::default())
+    }
+
+    /// [`Sequence::open`] with options.
+    pub fn open_with(
+        dir: impl AsRef<Path>,
+        camera_override: Option<Camera>,
+        options: &OpenOptions,
+    ) -> Result<Sequence> {
         let dir = dir.as_ref().to_path_buf();
+        let allow = options.allow_outside;
         if !dir.is_dir() {
             let source = if dir.exists() {
                 std::io::Error::other("not a folder")
@@ -96,13 +154,20 @@ impl Sequence {
             };
             return Err(Error::io(&dir, source));
         }
-        let (layout, frames, groundtruth) =
-            if dir.join("rgb.txt").is_file() || dir.join("depth.txt").is_file() {
-                let (frames, gt) = open_tum(&dir)?;
-                (Layout::Tum, frames, gt)
-            } else if dir.join("associations.txt").is_file() {
-                let (frames, gt) = open_icl(&dir)?;
-                (Layout::IclNuim, frames, gt)
+        let root = if allow {
+            None
+        } else {
+            Some(dir.canonicalize().map_err(|e| Error::io(&dir, e))?)
+        };
+        // `exists`, not `is_file`: a named pipe in place of a list is then refused by
+        // name rather than read as "not a sequence folder".
+        let (layout, frames, groundtruth, listing) =
+            if dir.join("rgb.txt").exists() || dir.join("depth.txt").exists() {
+                let (frames, gt, listing) = open_tum(&dir, allow)?;
+                (Layout::Tum, frames, gt, listing)
+            } else if dir.join("associations.txt").exists() {
+                let (frames, gt, listing) = open_icl(&dir, allow)?;
+                (Layout::IclNuim, frames, gt, listing)
             } else {
                 return Err(Error::UnknownLayout { dir });
             };
@@ -133,6 +198,7 @@ impl Sequence {
             },
         })?;
         for path in [&first.rgb, &first.depth] {
+            check_inside(path, root.as_deref())?;
             let (w, h) = png_size(path)?;
             if (w, h) != (camera.width, camera.height) {
                 return Err(Error::ImageSize {
@@ -147,11 +213,18 @@ impl Sequence {
 
         Ok(Sequence {
             dir,
+            root,
             layout,
             camera,
             frames: frames.into(),
             groundtruth,
+            listing,
         })
+    }
+
+    /// What the lists held and how much of it became frames.
+    pub fn listing(&self) -> &Listing {
+        &self.listing
     }
 
     /// The sequence folder.
@@ -200,8 +273,11 @@ impl Sequence {
     pub fn every_nth(&self, step: usize) -> Sequence {
         let step = step.max(1);
         let frames: Vec<FrameInfo> = self.frames.iter().step_by(step).cloned().collect();
+        let mut listing = self.listing.clone();
+        listing.stepped_over += self.frames.len() - frames.len();
         Sequence {
             frames: frames.into(),
+            listing,
             ..self.clone()
         }
     }
@@ -219,7 +295,7 @@ impl Sequence {
             index,
             len: self.frames.len(),
         })?;
-        load_into(&self.camera, info, index, frame)
+        load_into(&self.camera, self.root.as_deref(), info, index, frame)
     }
 
     /// Streams the first `max_frames` frames (all if `None`), decoded ahead on a
@@ -227,17 +303,27 @@ impl Sequence {
     /// See [`FrameReader`].
     pub fn reader(&self, max_frames: Option<usize>, prefetch: usize) -> FrameReader {
         let n = max_frames.map_or(self.len(), |m| m.min(self.len()));
-        FrameReader::spawn(self.camera, self.frames.clone(), n, prefetch)
+        FrameReader::spawn(
+            self.camera,
+            self.root.clone(),
+            self.frames.clone(),
+            n,
+            prefetch,
+        )
     }
 }
 
-/// Decodes one frame described by `info` into `frame`.
+/// Decodes one frame described by `info` into `frame`; with a `root`, its files must
+/// resolve inside it.
 pub(crate) fn load_into(
     camera: &Camera,
+    root: Option<&Path>,
     info: &FrameInfo,
     index: usize,
     frame: &mut Frame,
 ) -> Result<()> {
+    check_inside(&info.rgb, root)?;
+    check_inside(&info.depth, root)?;
     read_intensity_png(&info.rgb, camera.width, camera.height, &mut frame.intensity)?;
     read_depth_png(&info.depth, camera.width, camera.height, &mut frame.depth)?;
     frame.index = index;
@@ -245,14 +331,42 @@ pub(crate) fn load_into(
     Ok(())
 }
 
-type Opened = (Vec<FrameInfo>, Option<Trajectory>);
+type Opened = (Vec<FrameInfo>, Option<Trajectory>, Listing);
 
-fn open_tum(dir: &Path) -> Result<Opened> {
-    let rgb = read_image_list(&dir.join("rgb.txt"))?;
-    let depth = read_image_list(&dir.join("depth.txt"))?;
+fn open_tum(dir: &Path, allow_outside: bool) -> Result<Opened> {
+    let rgb_path = dir.join("rgb.txt");
+    let depth_path = dir.join("depth.txt");
+    let rgb = read_image_list(&rgb_path, allow_outside)?;
+    let depth = read_image_list(&depth_path, allow_outside)?;
     let rgb_t: Vec<f64> = rgb.iter().map(|e| e.timestamp).collect();
     let depth_t: Vec<f64> = depth.iter().map(|e| e.timestamp).collect();
-    let frames = associate_stamps(&rgb_t, &depth_t, MAX_RGB_DEPTH_DT)
+    let pairs = associate_stamps(&rgb_t, &depth_t, MAX_RGB_DEPTH_DT);
+    let listing = Listing {
+        rgb_listed: rgb.len(),
+        depth_listed: depth.len(),
+        paired: pairs.len(),
+        unpaired_rgb: rgb.len() - pairs.len(),
+        unpaired_depth: depth.len() - pairs.len(),
+        stepped_over: 0,
+    };
+    for (n, list, other) in [
+        (listing.unpaired_rgb, &rgb_path, "depth"),
+        (listing.unpaired_depth, &depth_path, "colour"),
+    ] {
+        if n > 0 {
+            log::warn!(
+                "{}: {n} of its {} entries have no {other} image within {MAX_RGB_DEPTH_DT} s \
+                 and are skipped",
+                shown_path(list),
+                if other == "depth" {
+                    rgb.len()
+                } else {
+                    depth.len()
+                },
+            );
+        }
+    }
+    let frames = pairs
         .into_iter()
         .map(|(i, j)| FrameInfo {
             timestamp: rgb[i].timestamp,
@@ -267,12 +381,18 @@ fn open_tum(dir: &Path) -> Result<Opened> {
     } else {
         None
     };
-    Ok((frames, gt))
+    Ok((frames, gt, listing))
 }
 
-fn open_icl(dir: &Path) -> Result<Opened> {
+fn open_icl(dir: &Path, allow_outside: bool) -> Result<Opened> {
     let path = dir.join("associations.txt");
-    let frames = parse_associations(&read_text(&path)?, &path, dir)?;
+    let frames = parse_associations_with(&read_text(&path)?, &path, dir, allow_outside)?;
+    let listing = Listing {
+        rgb_listed: frames.len(),
+        depth_listed: frames.len(),
+        paired: frames.len(),
+        ..Listing::default()
+    };
     let mut gts: Vec<PathBuf> = std::fs::read_dir(dir)
         .map_err(|e| Error::io(dir, e))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -295,13 +415,24 @@ fn open_icl(dir: &Path) -> Result<Opened> {
         Some(p) => Some(Trajectory::read_tum(p)?),
         None => None,
     };
-    Ok((frames, gt))
+    Ok((frames, gt, listing))
 }
 
 /// Parses an ICL-NUIM `associations.txt` (`id depth/id.png id rgb/id.png` per line,
 /// ids strictly increasing) into frames whose files are in `dir`; `path` is only used
-/// in error messages.
+/// in error messages. A file name that is absolute or climbs out of `dir` with `..`
+/// is an error naming the line.
 pub fn parse_associations(text: &str, path: &Path, dir: &Path) -> Result<Vec<FrameInfo>> {
+    parse_associations_with(text, path, dir, false)
+}
+
+/// [`parse_associations`], accepting file names outside `dir` if `allow_outside`.
+pub fn parse_associations_with(
+    text: &str,
+    path: &Path,
+    dir: &Path,
+    allow_outside: bool,
+) -> Result<Vec<FrameInfo>> {
     let path = path.to_path_buf();
     let mut frames = Vec::new();
     let mut mono = Monotonic::default();
@@ -322,8 +453,8 @@ pub fn parse_associations(text: &str, path: &Path, dir: &Path) -> Result<Vec<Fra
         frames.push(FrameInfo {
             timestamp: t,
             depth_timestamp: t,
-            rgb: dir.join(r.fields[3]),
-            depth: dir.join(r.fields[1]),
+            rgb: join_entry(dir, &path, r.line, r.fields[3], allow_outside)?,
+            depth: join_entry(dir, &path, r.line, r.fields[1], allow_outside)?,
         });
         if t_rgb != t {
             log::debug!(

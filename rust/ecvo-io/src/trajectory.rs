@@ -11,6 +11,11 @@ use nalgebra::{Quaternion, Translation3, UnitQuaternion};
 use crate::error::{Error, Result};
 use crate::list::{Monotonic, parse_f64, read_text, records};
 
+/// Largest position coordinate a trajectory file may hold, metres: beyond it the
+/// squares of the evaluation's sums are no longer exact enough to mean anything (and
+/// near 1e154 they overflow to infinity).
+pub const MAX_COORDINATE_M: f64 = 1e9;
+
 /// A sequence of timestamped camera-to-world poses; `stamps[i]` belongs to `poses[i]`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Trajectory {
@@ -57,7 +62,8 @@ impl Trajectory {
 
     /// Parses TUM trajectory text; `path` is only used in error messages.
     ///
-    /// Each data line holds exactly 8 numbers; the quaternion is normalised and must
+    /// Each data line holds exactly 8 finite numbers, positions within
+    /// [`MAX_COORDINATE_M`]; the quaternion is normalised and must
     /// not be (near) zero; timestamps must be strictly increasing.
     pub fn parse_tum(text: &str, path: &Path) -> Result<Self> {
         let mut traj = Trajectory::new();
@@ -79,6 +85,18 @@ impl Trajectory {
                 v[k] = parse_f64(path, r.line, NAMES[k], r.fields[k])?;
             }
             mono.check(path, r.line, v[0])?;
+            for k in 1..4 {
+                if v[k].abs() > MAX_COORDINATE_M {
+                    return Err(Error::parse(
+                        path,
+                        r.line,
+                        format!(
+                            "{} {} is out of range (at most {MAX_COORDINATE_M:e} m from the origin)",
+                            NAMES[k], v[k]
+                        ),
+                    ));
+                }
+            }
             let q = Quaternion::new(v[7], v[4], v[5], v[6]);
             let norm = q.norm();
             if !(norm > 1e-6) {
@@ -195,5 +213,16 @@ mod tests {
         assert!(matches!(e, Error::NonMonotonic { line: 3, .. }), "{e}");
         let e = Trajectory::parse_tum("1 0 0 0 0 0 0 0\n", p).unwrap_err();
         assert!(e.to_string().starts_with("gt.txt:1:"), "{e}");
+        // Non-finite and absurd values are refused with their line.
+        for (line, needle) in [
+            ("2 nan 0 0 0 0 0 1", "tx"),
+            ("2 0 0 0 0 inf 0 1", "qy"),
+            ("2 0 1e300 0 0 0 0 1", "out of range"),
+            ("inf 0 0 0 0 0 0 1", "timestamp"),
+        ] {
+            let text = format!("1 0 0 0 0 0 0 1\n{line}\n");
+            let e = Trajectory::parse_tum(&text, p).unwrap_err().to_string();
+            assert!(e.starts_with("gt.txt:2:") && e.contains(needle), "{e}");
+        }
     }
 }

@@ -2,6 +2,9 @@
 
 #![allow(dead_code)]
 
+pub mod png;
+
+use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -93,4 +96,105 @@ pub fn check_counters(s: &serde_json::Value, frames: u64, levels: usize) {
         "{s}"
     );
     assert!(count("refused_refinements") <= count("refinements"), "{s}");
+}
+
+/// A copy of the first `frames` frames of the test stream in `dir` (lists, images,
+/// camera.json, ground truth).
+pub fn mini_sequence(dir: &Path, frames: usize) -> PathBuf {
+    let src = testdata_stream();
+    let seq = dir.join("seq");
+    fs::create_dir_all(seq.join("rgb")).unwrap();
+    fs::create_dir_all(seq.join("depth")).unwrap();
+    fs::copy(src.join("camera.json"), seq.join("camera.json")).unwrap();
+    for list in ["rgb.txt", "depth.txt", "groundtruth.txt"] {
+        let text = fs::read_to_string(src.join(list)).unwrap();
+        let mut kept = Vec::new();
+        let mut n = 0;
+        for line in text.lines() {
+            if line.starts_with('#') {
+                kept.push(line.to_string());
+            } else if n < frames {
+                n += 1;
+                kept.push(line.to_string());
+                if list != "groundtruth.txt" {
+                    let file = line.split_whitespace().nth(1).unwrap();
+                    fs::copy(src.join(file), seq.join(file)).unwrap();
+                }
+            }
+        }
+        fs::write(seq.join(list), kept.join("\n") + "\n").unwrap();
+    }
+    seq
+}
+
+/// The n-th (0-based) data line of a list file: `(timestamp, file)`.
+pub fn entry(list: &Path, n: usize) -> (String, String) {
+    let text = fs::read_to_string(list).unwrap();
+    let line = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .nth(n)
+        .unwrap()
+        .to_string();
+    let mut f = line.split_whitespace();
+    (f.next().unwrap().into(), f.next().unwrap().into())
+}
+
+/// Checks a failed run: non-zero status, no panic, and stderr containing every one
+/// of `needles`. Returns stderr.
+pub fn fails(out: &Output, needles: &[&str]) -> String {
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!out.status.success(), "succeeded unexpectedly: {stderr}");
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    for n in needles {
+        assert!(stderr.contains(n), "stderr lacks `{n}`:\n{stderr}");
+    }
+    stderr
+}
+
+pub fn run_seq(seq: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["run", seq.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    run(&args)
+}
+
+/// Runs `ecvo` with `args`, killing it and failing the test if it takes more than
+/// `secs` seconds (a hang on hostile input is a failure, not a stuck test run).
+pub fn run_within(args: &[&str], secs: u64) -> Output {
+    use std::io::Read as _;
+    let mut child = ecvo()
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the ecvo binary runs");
+    let start = std::time::Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().expect("waiting for ecvo") {
+            let (mut stdout, mut stderr) = (Vec::new(), Vec::new());
+            child
+                .stdout
+                .take()
+                .unwrap()
+                .read_to_end(&mut stdout)
+                .unwrap();
+            child
+                .stderr
+                .take()
+                .unwrap()
+                .read_to_end(&mut stderr)
+                .unwrap();
+            return Output {
+                status,
+                stdout,
+                stderr,
+            };
+        }
+        if start.elapsed().as_secs() >= secs {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("ecvo {args:?} did not finish within {secs} s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
 }
