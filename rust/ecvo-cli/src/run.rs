@@ -534,8 +534,8 @@ fn human_summary(seq: &Path, t: &Tracked, s: &StageStats, out: &Path) -> String 
     );
     let ahead = if t.run.stats.ahead_computed > 0 {
         format!(
-            " (the filter stage also computed [A] for {} of {} frames; that time is in \
-             its figure, not the tracker's)",
+            " (the filter stage's thread computed [A] ahead for {} of {} frames; that time \
+             is booked to the tracker)",
             t.run.stats.ahead_computed, t.run.stats.tracked
         )
     } else {

@@ -41,6 +41,9 @@ pub(crate) struct Ahead {
     pub prior: Option<ecvo_core::Pose>,
     /// The result.
     pub result: ecvo_core::MotionResult,
+    /// How long computing it took on the filter stage's thread: booked to the tracker
+    /// stage's time, not the filter's (used or discarded, it is the tracker's work).
+    pub took: std::time::Duration,
 }
 
 /// One pooled frame.

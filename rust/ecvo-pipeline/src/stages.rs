@@ -66,16 +66,16 @@ pub(crate) fn filter_stage(
                     let offline = s.admission == Admission::Offline;
                     let known =
                         chain.prior(config, prev, prepared.timestamp, behind, offline, published);
-                    known.map(|prior| Ahead {
-                        against: prev.sequence(),
-                        prior,
-                        result: frame_to_frame(
-                            &mut estimator,
-                            prepared,
-                            prev,
-                            prior.as_ref(),
-                            config,
-                        ),
+                    known.map(|prior| {
+                        let t1 = Instant::now();
+                        let result =
+                            frame_to_frame(&mut estimator, prepared, prev, prior.as_ref(), config);
+                        Ahead {
+                            against: prev.sequence(),
+                            prior,
+                            result,
+                            took: t1.elapsed(),
+                        }
                     })
                 }
                 _ => None,
@@ -85,11 +85,14 @@ pub(crate) fn filter_stage(
             }
             (r, ahead, t0.elapsed())
         });
+        let filtered_in = filtered_in.saturating_sub(ahead.map_or(Duration::ZERO, |a| a.took));
         slot_mut.meta = FrameMeta {
             sequence: raw.sequence,
             pushed_at: raw.pushed_at,
             ahead,
         };
+        // [A] computed ahead is the tracker's work: the filter's figure leaves it out and
+        // the tracker stage books it with the frame, used or discarded.
         lock(&s.timers.filter).record(filtered_in);
         s.give_raw(raw);
         if let Err(e) = result {
@@ -147,6 +150,8 @@ pub(crate) fn tracker_stage(
             });
             (out, t0.elapsed())
         });
+        // The [A] the filter stage computed ahead for this frame is tracker work.
+        let tracked_in = tracked_in + meta.ahead.map_or(Duration::ZERO, |a| a.took);
         if used_ahead {
             s.update_progress(|p| p.ahead_used += 1);
         }
