@@ -2,6 +2,7 @@ package io.ecvo;
 
 import java.io.File;
 import java.nio.ByteBuffer;
+import java.nio.ByteOrder;
 import java.util.Locale;
 import java.util.Map;
 import java.util.TreeMap;
@@ -77,9 +78,10 @@ public final class Stress {
                 return false;
             }
             case "pushBuffers": {
-                // Each thread its own buffers: a direct buffer's position is not shared state
-                // for the native side (it reads from the base address), but keep it clean.
-                ByteBuffer d = f.depthBuffers.get(i).duplicate(), g = f.intensityBuffers.get(i).duplicate();
+                // Each thread its own view: the native side reads from position() to limit(),
+                // which are per-view state. duplicate() resets the byte order to BIG_ENDIAN,
+                // which the native side refuses for depth, so the order is set again.
+                ByteBuffer d = f.depthBuffers.get(i).duplicate().order(ByteOrder.LITTLE_ENDIAN), g = f.intensityBuffers.get(i).duplicate();
                 NativeBridge.nativePushBuffers(h, clock.addAndGet(33_333_333L), d, g);
                 return false;
             }
