@@ -16,6 +16,7 @@ import hashlib
 import json
 import math
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -203,8 +204,8 @@ def cmd_run(args):
             i = futures[fut]
             r = records[i] = fut.result()
             if r["status"] == "ok":
-                what = (f"ATE {r['ate_m']:.4f} m, drift {fmt(r['drift_trans_m_per_s'], 4)} m/s "
-                        f"{fmt(r['drift_rot_deg_per_s'], 3)} deg/s, lost {r['lost_frames']}"
+                what = (f"ATE {sig(r['ate_m'])} m, drift {sig(r['drift_trans_m_per_s'])} m/s "
+                        f"{sig(r['drift_rot_deg_per_s'])} deg/s, lost {r['lost_frames']}"
                         + (" (done before)" if r["resumed"] else f", {r['wall_s']:.1f} s"))
             else:
                 what = f"FAILED: {r['error']}"
@@ -239,7 +240,7 @@ def cmd_render(args):
             print(f"{group}: {dest} rendered before, left as it is")
             continue
         if not os.path.isfile(path):
-            (warn if not required else print)(f"{group}: no {path} here, not rendered")
+            warn(f"{group}: no {path} here, not rendered" + ("" if required else " (optional)"))
             status |= 1 if required else 0
             continue
         start = time.monotonic()
@@ -288,6 +289,15 @@ def fmt(v, digits=3):
     if v is None:
         return "–"
     return f"{v:.{digits}f}"
+
+
+def sig(v, digits=3):
+    """v with `digits` significant digits, in fixed notation (0.0200, 0.000130)."""
+    if v is None:
+        return "–"
+    if v == 0 or not math.isfinite(v):
+        return str(v)
+    return f"{v:.{min(8, max(0, digits - 1 - math.floor(math.log10(abs(v)))))}f}"
 
 
 def ms_total(rec):
@@ -361,8 +371,10 @@ def cmd_compare(args):
     la, lb = a["label"], b["label"]
     print(f"{lb} against {la}: geometric means of per-cell ratios {lb}/{la} "
           "(below 1: {0} is better)".format(lb))
-    print(f"{la}: {' '.join(a.get('flags') or []) or '(defaults)'}; "
-          f"{lb}: {' '.join(b.get('flags') or []) or '(defaults)'}")
+    for label, res in ((la, a), (lb, b)):
+        wall = sum(c.get("wall_s") or 0 for c in res["cells"])
+        print(f"{label}: {' '.join(res.get('flags') or []) or '(defaults)'} "
+              f"({len(res['cells'])} cells, {wall:.0f} s of ecvo runs, {res.get('ecvo', '?')})")
     print("Each figure is floored before its ratio is taken (ATE %g m, drift %g m/s, %g deg/s); "
           "%d figure(s) were below their floor." % (FLOORS["ate_m"], FLOORS["drift_trans_m_per_s"],
                                                      FLOORS["drift_rot_deg_per_s"], floored_count))
@@ -406,25 +418,25 @@ def cmd_compare(args):
     table = []
     for cid in list(cells_a) + [i for i in cells_b if i not in cells_a]:
         ra, rb = cells_a.get(cid, {}), cells_b.get(cid, {})
-        table.append([cid, cell_text(ra, "ate_m", 4), cell_text(rb, "ate_m", 4),
+        table.append([cid, cell_text(ra, "ate_m"), cell_text(rb, "ate_m"),
                       drift_text(ra), drift_text(rb),
                       f"{lost_text(ra)}/{lost_text(rb)}"])
     print(render_table(header, table, args.markdown))
     return 0
 
 
-def cell_text(rec, metric, digits):
+def cell_text(rec, metric):
     if not rec:
         return "–"
     if rec.get("status") != "ok":
         return "failed"
-    return fmt(rec.get(metric), digits)
+    return sig(rec.get(metric))
 
 
 def drift_text(rec):
     if not rec or rec.get("status") != "ok":
-        return cell_text(rec, "", 0)
-    return f"{fmt(rec['drift_trans_m_per_s'], 4)}, {fmt(rec['drift_rot_deg_per_s'], 3)}"
+        return cell_text(rec, "")
+    return f"{sig(rec['drift_trans_m_per_s'])}, {sig(rec['drift_rot_deg_per_s'])}"
 
 
 def lost_text(rec):
@@ -450,7 +462,7 @@ def cmd_table(args):
             elif rec["status"] != "ok":
                 row.append(f"failed ({rec.get('error')})")
             else:
-                row.append(f"{fmt(rec['ate_m'], 4)} ({rec['lost_frames']})")
+                row.append(f"{sig(rec['ate_m'])} ({rec['lost_frames']})")
         table.append(row)
     print(render_table(header, table, True))
     return 0
@@ -516,4 +528,5 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # `suite.py table ... | head` ends quietly
     sys.exit(main())

@@ -83,6 +83,10 @@ class CompareTest(unittest.TestCase):
         self.assertAlmostEqual(fast["metrics"]["ate_m"]["geomean"], 1.1)
         self.assertEqual(fast["metrics"]["ate_m"]["better"], 0)
 
+    def test_figures_keep_three_significant_digits(self):
+        self.assertEqual([suite.sig(v) for v in (0.02, 0.00013, 13.303, 0.3240, None)],
+                         ["0.0200", "0.000130", "13.3", "0.324", "–"])
+
     def test_floors_keep_tiny_figures_from_blowing_up(self):
         # ATE 0.0001 m against 0.000001 m would be a ratio of 0.01; floored at 1e-5: 0.1.
         # Drift of 1e-7 against 1e-8 m/s: both under the floor, ratio 1.
