@@ -140,6 +140,9 @@ def run_cell(c, ecvo, flags, key, label_dir, keep_cloud, timeout):
             old["resumed"] = True
             return old
     os.makedirs(out, exist_ok=True)
+    for stale in ("summary.json", "suite-cell.json"):
+        if os.path.exists(os.path.join(out, stale)):
+            os.remove(os.path.join(out, stale))
     cmd = [ecvo, "run", c["seq"], "--out", out, "--threads", "1",
            "--frame-step", str(c["step"]), "-q"] + list(flags)
     rec = dict(c, key=key, command=cmd, resumed=False)
@@ -148,7 +151,8 @@ def run_cell(c, ecvo, flags, key, label_dir, keep_cloud, timeout):
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
         rc, stderr = proc.returncode, proc.stderr
     except subprocess.TimeoutExpired as e:
-        rc, stderr = None, f"timed out after {timeout} s\n{e.stderr or ''}"
+        err = e.stderr.decode(errors="replace") if isinstance(e.stderr, bytes) else e.stderr
+        rc, stderr = None, f"timed out after {timeout} s\n{err or ''}"
     except OSError as e:
         rc, stderr = None, f"could not start: {e}"
     rec["wall_s"] = round(time.monotonic() - start, 3)

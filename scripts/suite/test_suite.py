@@ -135,13 +135,15 @@ FAKE_ECVO = textwrap.dedent("""\
     #!/usr/bin/env python3
     # Stands in for `ecvo run SEQ --out DIR ... --frame-step N -q FLAGS`: writes a summary.json
     # whose ATE is the step times 0.01 (times 2 with --worse), fails on a sequence named *bad*,
-    # and counts its calls in SEQ/../calls.
+    # exits with 0 but writes nothing with --no-summary, and counts its calls in SEQ/../calls.
     import json, os, sys
     args = sys.argv[1:]
     seq, out = args[1], args[args.index("--out") + 1]
     step = int(args[args.index("--frame-step") + 1])
     with open(os.path.join(os.path.dirname(seq), "calls"), "a") as f:
         f.write(seq + "\\n")
+    if "--no-summary" in args:
+        sys.exit(0)
     if "bad" in os.path.basename(seq):
         sys.stderr.write("error: cannot read the sequence\\n")
         sys.exit(3)
@@ -210,6 +212,13 @@ class RunTest(unittest.TestCase):
         rc, text, res = self.run_suite("base", "--worse")
         self.assertEqual(self.calls(), 7)
         self.assertAlmostEqual({c["id"]: c for c in res["cells"]}["real/seq_a_s1"]["ate_m"], 0.02)
+
+    def test_a_summary_left_by_an_earlier_run_is_not_taken(self):
+        self.run_suite("base")
+        rc, text, res = self.run_suite("base", "--no-summary")
+        self.assertEqual(rc, 1)
+        self.assertEqual([(c["status"], c["error"]) for c in res["cells"]],
+                         [("failed", "no summary.json")] * 3)
 
     def test_run_then_compare(self):
         self.run_suite("base")
