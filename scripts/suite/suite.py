@@ -308,8 +308,9 @@ def ms_total(rec):
     return ((rec.get("ms_per_frame") or {}).get("total") or {}).get("median")
 
 
-def compare(a, b):
-    """Per-group comparison of B against A, on the cells both ran successfully."""
+def compare(a, b, threshold=1.05):
+    """Per-group comparison of B against A, on the cells both ran successfully. A row's
+    `over` lists the cells whose drift (translation or rotation) ratio exceeds threshold."""
     cells_a = {c["id"]: c for c in a["cells"]}
     cells_b = {c["id"]: c for c in b["cells"]}
     groups, order = {}, []
@@ -342,6 +343,11 @@ def compare(a, b):
                 if va is not None and vb is not None:
                     ratios.append((vb / va, cid))
             worst = max(ratios) if ratios else (None, None)
+            if metric.startswith("drift"):
+                row.setdefault("over", {})
+                for r, cid in ratios:
+                    if r > threshold:
+                        row["over"][cid] = max(r, row["over"].get(cid, 0))
             row["metrics"][metric] = {
                 "geomean": geomean([r for r, _ in ratios]), "n": len(ratios),
                 "better": sum(1 for r, _ in ratios if r < 1),
@@ -371,7 +377,7 @@ def render_table(header, rows, markdown):
 
 def cmd_compare(args):
     a, b = load_results(args.a), load_results(args.b)
-    rows, floored_count = compare(a, b)
+    rows, floored_count = compare(a, b, args.threshold)
     la, lb = a["label"], b["label"]
     print(f"{lb} against {la}: geometric means of per-cell ratios {lb}/{la} "
           "(below 1: {0} is better)".format(lb))
@@ -401,6 +407,11 @@ def cmd_compare(args):
             if m[k]["worst_cell"]:
                 notes.append(f"{r['group']}: worst {name} {m[k]['worst_cell']} "
                              f"({fmt(m[k]['worst'], 3)})")
+        if r.get("over"):
+            notes.append(f"{r['group']}: {len(r['over'])} of {r['cells']} cells worse than "
+                         f"{args.threshold:g}x in drift: " + ", ".join(
+                             f"{c} ({x:.3f})" for c, x in sorted(r["over"].items(),
+                                                               key=lambda kv: -kv[1])))
         for cid, who in r["failed"]:
             notes.append(f"{r['group']}: {cid} FAILED in {', '.join(who)} (left out of the ratios)")
         for cid in r["only_a"]:
@@ -521,6 +532,8 @@ def main(argv=None):
     q.add_argument("a")
     q.add_argument("b")
     q.add_argument("--markdown", action="store_true")
+    q.add_argument("--threshold", type=float, default=1.05,
+                   help="list the cells whose drift ratio B/A exceeds this (default 1.05)")
     q.set_defaults(func=cmd_compare)
 
     q = sub.add_parser("table", help="markdown table of ATE (lost) per cell, a column per label")

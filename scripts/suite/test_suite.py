@@ -82,6 +82,14 @@ class CompareTest(unittest.TestCase):
         self.assertAlmostEqual(fast["metrics"]["drift_trans_m_per_s"]["geomean"], 1.2)
         self.assertAlmostEqual(fast["metrics"]["ate_m"]["geomean"], 1.1)
         self.assertEqual(fast["metrics"]["ate_m"]["better"], 0)
+        # drift over 1.05x: real/b_s1 (translation 2x), fast/c_s1 (translation 1.2x)
+        self.assertEqual(real["over"], {"real/b_s1": 2.0})
+        self.assertEqual(list(fast["over"]), ["fast/c_s1"])
+        self.assertAlmostEqual(fast["over"]["fast/c_s1"], 1.2)
+        rc, out = capture(["compare", os.path.join(self.root, "A"), os.path.join(self.root, "B"),
+                           "--threshold", "1.5"])
+        self.assertIn("real: 1 of 2 cells worse than 1.5x in drift: real/b_s1 (2.000)", out)
+        self.assertNotIn("fast: 1 of 1 cells worse", out)
 
     def test_figures_keep_three_significant_digits(self):
         self.assertEqual([suite.sig(v) for v in (0.02, 0.00013, 13.303, 0.3240, None)],
