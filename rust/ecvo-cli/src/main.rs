@@ -264,7 +264,8 @@ struct TrackArgs {
     /// finest).
     #[arg(long, value_enum)]
     weighting: Option<WeightingArg>,
-    /// Depth residual noise: constant, or quadratic (σ grows with z²).
+    /// Depth residual noise: constant, quadratic (σ grows with z²), or fitted
+    /// (σ² = a + b·z⁴ fitted to the depth residuals while tracking).
     #[arg(long, value_enum)]
     depth_noise: Option<DepthNoiseArg>,
     /// What [A] starts from: identity, or velocity (constant-velocity prediction,
@@ -359,8 +360,12 @@ enum WeightingArg {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum DepthNoiseArg {
+    /// The same noise at every depth.
     Constant,
+    /// Noise growing as z² (a Kinect's structured light).
     Quadratic,
+    /// σ² = a + b·z⁴ fitted to the depth residuals while tracking.
+    Fitted,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -396,6 +401,7 @@ impl TrackArgs {
             depth_noise: self.depth_noise.map(|d| match d {
                 DepthNoiseArg::Constant => DepthNoiseModel::Constant,
                 DepthNoiseArg::Quadratic => DepthNoiseModel::Quadratic,
+                DepthNoiseArg::Fitted => DepthNoiseModel::Fitted,
             }),
             prior: self.prior.map(|p| match p {
                 PriorArg::Identity => MotionPrior::Identity,

@@ -440,6 +440,8 @@ fn summary_json(
     summary["simd"] = json!(ecvo_core::simd_path());
     summary["refinements"] = json!(c.refinements);
     summary["refused_refinements"] = json!(c.refused_refinements);
+    summary["noise_refits"] = json!(c.noise_refits);
+    summary["depth_noise_in_use"] = json!(format!("{:?}", t.run.stats.depth_noise));
     summary["frames_account"] = account(t, settings).1;
     // `ground_truth` means an ATE was computed; these say whether the sequence had a
     // ground-truth file and, if no ATE, why.

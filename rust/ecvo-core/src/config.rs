@@ -132,14 +132,29 @@ pub enum Weighting {
 }
 
 /// How the noise of a depth residual depends on depth.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DepthNoiseModel {
     /// The same for every pixel.
     Constant,
     /// Standard deviation growing with z² (structured-light and time-of-flight
     /// sensors): the depth residual of a point at depth z is divided by z² (z in
     /// metres, at least 0.3), so the scale describes the noise at 1 m.
+    #[default]
     Quadratic,
+    /// `σ_Z(z)² ∝ α + z⁴` with `α = 2^(half_log2_alpha / 2)` (z at least 0.3 m): the
+    /// depth residual's gain is `λ·√((α + 1) / (α + z⁴))`, λ at 1 m; between
+    /// `Quadratic` (`α → 0`) and `Constant` (`α → ∞`). What [`DepthNoiseModel::Fitted`]
+    /// settles on; also usable fixed.
+    Mixed {
+        /// `2 log2 α`.
+        half_log2_alpha: i8,
+    },
+    /// Fitted to the data while tracking ([`crate::noise`]): the tracker starts from
+    /// `Quadratic` and re-fits `σ_Z(z)² = a + b·z⁴` from the depth residuals of the
+    /// registrations it believes, then uses the [`DepthNoiseModel::Mixed`] (or
+    /// `Quadratic`, `Constant`) closest to it. A bare [`crate::MotionEstimator`] reads
+    /// it as `Quadratic`.
+    Fitted,
 }
 
 /// What to start \[A\], the frame-to-frame `MOTION`, from.
@@ -211,6 +226,11 @@ pub struct MotionConfig {
     pub max_fine_depth_weight: f64,
     /// How the depth residual's noise grows with depth.
     pub depth_noise: DepthNoiseModel,
+    /// Measure the depth residuals' spread per depth at the end of the finest step
+    /// ([`crate::motion::MotionResult::depth_spread`]; a pass over every 4th
+    /// residual). The tracker sets it when `depth_noise` is
+    /// [`DepthNoiseModel::Fitted`].
+    pub depth_spread: bool,
     /// What \[A\] starts from.
     pub prior: MotionPrior,
     /// A result whose photometric residuals spread more than this (the robust scale
@@ -351,6 +371,7 @@ impl Config {
                 fine_weighting: None,
                 max_fine_depth_weight: 4.0,
                 depth_noise: DepthNoiseModel::Quadratic,
+                depth_spread: false,
                 prior: MotionPrior::ConstantVelocity,
                 max_intensity_sigma: 0.2,
                 max_depth_sigma_m: 0.05,

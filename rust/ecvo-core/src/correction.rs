@@ -75,6 +75,7 @@ mod tests {
             scale: None,
             start: 0,
             status: Status::Converged,
+            depth_spread: Default::default(),
         }
     }
 

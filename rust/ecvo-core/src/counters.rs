@@ -43,4 +43,6 @@ pub struct Counters {
     /// depth residuals both spread more than [`crate::Config::max_spread_jump`] times wider
     /// than the recent frame-to-frame registrations' ([`crate::spread`]).
     pub spread_jumps: u64,
+    /// Times the fitted depth-noise model ([`crate::DepthNoiseModel::Fitted`]) changed.
+    pub noise_refits: u64,
 }

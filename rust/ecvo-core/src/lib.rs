@@ -21,6 +21,7 @@ pub mod counters;
 pub mod error;
 pub mod memory;
 pub mod motion;
+pub mod noise;
 pub mod prepare;
 pub mod prior;
 pub mod scale;

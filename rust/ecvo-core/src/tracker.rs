@@ -15,12 +15,13 @@ use nalgebra::Matrix6;
 
 use crate::Pose;
 use crate::camera::{Camera, FrameView};
-use crate::config::{Config, MotionPrior, ReferenceLevel, Weighting};
+use crate::config::{Config, DepthNoiseModel, MotionConfig, MotionPrior, ReferenceLevel, Weighting};
 pub use crate::correction::correction_distance;
 use crate::correction::{chain_step, fuse_correction};
 pub use crate::counters::Counters;
 use crate::error::Result;
 use crate::motion::{MotionEstimator, MotionResult};
+use crate::noise::NoiseFit;
 use crate::prepare::{PreparedFrame, Preparer};
 pub use crate::prior::{Velocity, predict};
 use crate::se3;
@@ -147,6 +148,11 @@ pub struct Tracker<F> {
     /// [`chain_step`]; `None` after a recovery or a loss, when the chain is broken, and
     /// while `Config::fuse_corrections` is off): [`fuse_correction`].
     chain: Vec<Option<Matrix6<f64>>>,
+    /// The settings every `MOTION` call uses: `config.motion` with the depth-noise
+    /// model in use (under [`DepthNoiseModel::Fitted`], the fitted one).
+    motion: MotionConfig,
+    /// The depth-noise model's fit ([`DepthNoiseModel::Fitted`]).
+    noise: NoiseFit,
 }
 
 impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
@@ -169,6 +175,8 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             refused: vec![0; levels],
             spread: SpreadWatch::default(),
             chain: vec![None; levels],
+            motion: working_motion(&config.motion),
+            noise: NoiseFit::new(config.motion.depth_noise),
             config,
         })
     }
@@ -176,6 +184,25 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
     /// The configuration in use.
     pub fn config(&self) -> &Config {
         &self.config
+    }
+
+    /// The settings of the tracker's `MOTION` calls: the configuration's, with the
+    /// depth-noise model in use ([`Self::depth_noise`]). \[A\] computed elsewhere
+    /// ([`frame_to_frame`]) must use these to be the tracker's own.
+    pub fn motion_config(&self) -> &MotionConfig {
+        &self.motion
+    }
+
+    /// The depth-noise model in use: the configured one, or under
+    /// [`DepthNoiseModel::Fitted`] the one fitted so far (`Quadratic` until the first
+    /// fit moves it).
+    pub fn depth_noise(&self) -> DepthNoiseModel {
+        self.motion.depth_noise
+    }
+
+    /// The depth-noise fit (its last `(a, b)` of `σ² = a + b·z⁴`).
+    pub fn noise_fit(&self) -> &NoiseFit {
+        &self.noise
     }
 
     /// Counters so far.
@@ -217,19 +244,20 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
 
     /// Tracks one prepared frame (Figure 1(b)).
     pub fn track(&mut self, frame: F) -> FrameOutput {
-        self.track_with(frame, |_, _| None)
+        self.track_with(frame, |_, _, _| None)
     }
 
     /// Tracks one prepared frame whose \[A\] may have been computed ahead of time:
-    /// `ahead` is given the previous frame the tracker registers against and the
-    /// prediction it starts from, and returns [`frame_to_frame`]`(frame, previous,
-    /// prior)` if it was computed for exactly those, `None` otherwise (then the
-    /// tracker computes it). \[A\] depends on nothing but the two frames and the
-    /// prior, so the output is the same either way, bit for bit.
+    /// `ahead` is given the previous frame the tracker registers against, the
+    /// prediction it starts from and the depth-noise model in use, and returns
+    /// [`frame_to_frame`]`(frame, previous, prior)` if it was computed for exactly
+    /// those, `None` otherwise (then the tracker computes it). \[A\] depends on
+    /// nothing but the two frames, the prior and the settings, so the output is the
+    /// same either way, bit for bit.
     pub fn track_with(
         &mut self,
         frame: F,
-        ahead: impl FnOnce(&F, Option<&Pose>) -> Option<MotionResult>,
+        ahead: impl FnOnce(&F, Option<&Pose>, DepthNoiseModel) -> Option<MotionResult>,
     ) -> FrameOutput {
         let index = self.next_index;
         self.next_index += 1;
@@ -257,14 +285,14 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         };
 
         // [A] frame to frame, from the identity or the prediction.
-        let f2f = match ahead(&prev.frame, prior.as_ref()) {
+        let f2f = match ahead(&prev.frame, prior.as_ref(), self.motion.depth_noise) {
             Some(r) => r,
             None => frame_to_frame(
                 &mut self.estimator,
                 &frame,
                 &prev.frame,
                 prior.as_ref(),
-                &self.config,
+                &self.motion,
             ),
         };
         out.motion_estimations += 1;
@@ -287,6 +315,12 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             }
             if f2f.start > 0 {
                 self.counters.predicted_starts += 1;
+            }
+            if self.config.motion.depth_noise == DepthNoiseModel::Fitted
+                && let Some(m) = self.noise.record(&f2f.depth_spread)
+            {
+                self.motion.depth_noise = m;
+                self.counters.noise_refits += 1;
             }
             // A velocity only from consecutive frames: after a lost frame, [A] spans
             // the gap and the next prediction starts afresh from the identity (which is
@@ -344,7 +378,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             }
             let r =
                 self.estimator
-                    .motion(&frame, &reference.frame, &accumulated, &self.config.motion);
+                    .motion(&frame, &reference.frame, &accumulated, &self.motion);
             out.motion_estimations += 1;
             self.counters.motion_estimations += 1;
             if !r.is_ok() {
@@ -410,7 +444,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         }
         let r = self
             .estimator
-            .motion(frame, &reference.frame, &accumulated, &self.config.motion);
+            .motion(frame, &reference.frame, &accumulated, &self.motion);
         out.motion_estimations += 1;
         self.counters.motion_estimations += 1;
         self.counters.refinements += 1;
@@ -457,7 +491,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             let init = se3::compose(&reference.pose.inverse(), predicted);
             let r = self
                 .estimator
-                .motion(frame, &reference.frame, &init, &self.config.motion);
+                .motion(frame, &reference.frame, &init, &self.motion);
             out.motion_estimations += 1;
             self.counters.motion_estimations += 1;
             if r.is_ok() {
@@ -542,14 +576,24 @@ pub fn frame_to_frame(
     current: &PreparedFrame,
     previous: &PreparedFrame,
     prior: Option<&Pose>,
-    config: &Config,
+    motion: &MotionConfig,
 ) -> MotionResult {
     match prior {
-        Some(p) => {
-            estimator.motion_from(current, previous, &[Pose::identity(), *p], &config.motion)
-        }
-        None => estimator.motion(current, previous, &Pose::identity(), &config.motion),
+        Some(p) => estimator.motion_from(current, previous, &[Pose::identity(), *p], motion),
+        None => estimator.motion(current, previous, &Pose::identity(), motion),
     }
+}
+
+/// The settings a tracker starts its `MOTION` calls with for `motion`: under
+/// [`DepthNoiseModel::Fitted`], `Quadratic` until the fit moves it, and the depth
+/// spread measured.
+pub fn working_motion(motion: &MotionConfig) -> MotionConfig {
+    let mut m = motion.clone();
+    if m.depth_noise == DepthNoiseModel::Fitted {
+        m.depth_noise = DepthNoiseModel::Quadratic;
+        m.depth_spread = true;
+    }
+    m
 }
 
 /// The sequential engine: prepares each frame and tracks it, recycling prepared

@@ -91,6 +91,7 @@ use crossbeam_channel::{Receiver, SendTimeoutError, Sender, TrySendError};
 use ecvo_core::{
     Camera, Config, Counters, FrameOutput, FrameView, MotionEstimator, Pose, Preparer, Tracker,
     TrackingState, frame_to_frame,
+    tracker::working_motion,
 };
 
 pub use geometry::{CloudPoint, GeometryOptions};
@@ -258,6 +259,7 @@ impl Pipeline {
             progress: Mutex::new(Progress::default()),
             progress_changed: Condvar::new(),
             velocity: Mutex::new(None),
+            depth_noise: Mutex::new(working_motion(&config.motion).depth_noise),
             latest: Mutex::new(LatestPose {
                 tracked: 0,
                 sequence: 0,

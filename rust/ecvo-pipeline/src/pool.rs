@@ -39,6 +39,8 @@ pub(crate) struct Ahead {
     pub against: u64,
     /// The constant-velocity prediction it started from (besides the identity).
     pub prior: Option<ecvo_core::Pose>,
+    /// The depth-noise model it used.
+    pub depth_noise: ecvo_core::DepthNoiseModel,
     /// The result.
     pub result: ecvo_core::MotionResult,
     /// How long computing it took on the filter stage's thread: booked to the tracker

@@ -158,6 +158,7 @@ impl Pipeline {
             frame_pool: s.frames.stats(),
             counters: lock(&s.counters).clone(),
             cloud_points: self.cloud_len(),
+            depth_noise: *lock(&s.depth_noise),
         }
     }
 }

@@ -121,6 +121,9 @@ pub(crate) struct Shared {
     /// (motion and interval) when it registered frame to frame. The filter stage
     /// restarts its \[A\]-ahead chain from it.
     pub(crate) velocity: Mutex<Published>,
+    /// The depth-noise model the tracker uses after its last frame (it changes under
+    /// `DepthNoiseModel::Fitted`): \[A\] computed ahead must use it.
+    pub(crate) depth_noise: Mutex<ecvo_core::DepthNoiseModel>,
     pub(crate) counters: Mutex<Counters>,
     /// The kept poses and reference records (`keep_trajectory`).
     pub(crate) poses: Mutex<PoseLog>,

@@ -15,6 +15,8 @@ pub(crate) fn filter_stage(
 ) {
     let mut estimator =
         MotionEstimator::with_capacity(ecvo_core::prepare::max_template_points(config));
+    // The tracker's `MOTION` settings, with the depth-noise model it last published.
+    let mut motion = working_motion(&config.motion);
     // The frame prepared last, while the next one may still follow at once.
     let mut last: Option<PooledFrame> = None;
     // What the tracker's prediction for the next frame will be, as far as this stage
@@ -68,11 +70,13 @@ pub(crate) fn filter_stage(
                         chain.prior(config, prev, prepared.timestamp, behind, offline, published);
                     known.map(|prior| {
                         let t1 = Instant::now();
+                        motion.depth_noise = *lock(&s.depth_noise);
                         let result =
-                            frame_to_frame(&mut estimator, prepared, prev, prior.as_ref(), config);
+                            frame_to_frame(&mut estimator, prepared, prev, prior.as_ref(), &motion);
                         Ahead {
                             against: prev.sequence(),
                             prior,
+                            depth_noise: motion.depth_noise,
                             result,
                             took: t1.elapsed(),
                         }
@@ -141,10 +145,12 @@ pub(crate) fn tracker_stage(
         let mut used_ahead = false;
         let (out, tracked_in) = compute.install(|| {
             let t0 = Instant::now();
-            let out = tracker.track_with(frame, |prev, prior| {
-                let a = meta
-                    .ahead
-                    .filter(|a| a.against == prev.sequence() && a.prior.as_ref() == prior)?;
+            let out = tracker.track_with(frame, |prev, prior, noise| {
+                let a = meta.ahead.filter(|a| {
+                    a.against == prev.sequence()
+                        && a.prior.as_ref() == prior
+                        && a.depth_noise == noise
+                })?;
                 used_ahead = true;
                 Some(a.result)
             });
@@ -155,6 +161,7 @@ pub(crate) fn tracker_stage(
         if used_ahead {
             s.update_progress(|p| p.ahead_used += 1);
         }
+        *lock(&s.depth_noise) = tracker.depth_noise();
         *lock(&s.velocity) = Some((
             meta.sequence,
             tracker

@@ -187,6 +187,9 @@ pub struct PipelineStats {
     pub counters: Counters,
     /// Points in the cloud.
     pub cloud_points: usize,
+    /// The depth-noise model the tracker used last (under `DepthNoiseModel::Fitted`,
+    /// the one fitted so far).
+    pub depth_noise: ecvo_core::DepthNoiseModel,
 }
 
 /// Copies `src` into `dst` reusing `dst`'s buffers (a derived `clone_from` would
@@ -207,6 +210,7 @@ pub(crate) fn copy_counters(dst: &mut Counters, src: &Counters) {
         reanchors,
         implausible_motions,
         spread_jumps,
+        noise_refits,
     } = src;
     dst.frames = *frames;
     dst.motion_estimations = *motion_estimations;
@@ -222,6 +226,7 @@ pub(crate) fn copy_counters(dst: &mut Counters, src: &Counters) {
     dst.reanchors = *reanchors;
     dst.implausible_motions = *implausible_motions;
     dst.spread_jumps = *spread_jumps;
+    dst.noise_refits = *noise_refits;
 }
 
 #[cfg(test)]

@@ -7,7 +7,9 @@ use nalgebra::{Matrix6, SymmetricEigen};
 
 use super::{Failure, MAX_STARTS, MAX_STEPS, MotionResult, NormalEquations, Status};
 use crate::Pose;
-use crate::config::{DepthNoiseModel, MotionConfig, MotionLevel, Weighting};
+use crate::noise::DepthSpread;
+use super::warp::NoiseGain;
+use crate::config::{MotionConfig, MotionLevel, Weighting};
 use crate::prepare::{ImageLevel, PreparedFrame};
 use crate::scale::{self, PassSums, Scale, Whitener};
 use crate::se3;
@@ -35,6 +37,11 @@ pub(super) trait Loops {
     /// Weights and whitens the stored residuals and accumulates the normal
     /// equations, with their [`Self::cost`] as the error.
     fn normal_equations(&mut self, level: &ImageLevel, wh: &Whitener) -> NormalEquations;
+    /// The raw depth residuals' spread per depth over the stored residuals (see
+    /// [`MotionResult::depth_spread`]); none by default.
+    fn depth_spread(&mut self) -> DepthSpread {
+        DepthSpread::default()
+    }
 }
 
 /// Smallest number of residuals a coarse step needs to be worth solving.
@@ -52,8 +59,8 @@ pub(super) struct Params {
     pub(super) lambda: f32,
     /// The scale's form.
     pub(super) weighting: Weighting,
-    /// The quadratic depth noise model.
-    pub(super) quadratic_noise: bool,
+    /// The depth residual's gain as a function of depth.
+    pub(super) noise: NoiseGain,
     /// [`MotionConfig::scale_tolerance`].
     pub(super) scale_tolerance: f64,
     /// `Σ_ZZ` is whitened as at least this times `Σ_II` (0 at every step but the
@@ -67,7 +74,7 @@ impl Params {
             nu: cfg.t_dof as f32,
             lambda: cfg.depth_gain as f32,
             weighting: cfg.weighting,
-            quadratic_noise: cfg.depth_noise == DepthNoiseModel::Quadratic,
+            noise: NoiseGain::of(cfg.depth_noise, cfg.depth_gain as f32),
             scale_tolerance: cfg.scale_tolerance,
             zz_floor: 0.0,
         }
@@ -123,6 +130,7 @@ pub(super) fn motion_from<K: Loops>(
         scale: None,
         start: 0,
         status: Status::Failed(Failure::TooFewPixels),
+        depth_spread: DepthSpread::default(),
     };
     if inits.is_empty() || !inits.iter().all(se3::is_finite) {
         result.status = Status::Failed(Failure::NotFinite);
@@ -235,6 +243,11 @@ pub(super) fn motion_from<K: Loops>(
     };
     if result.is_ok() {
         result.pose = pose;
+        if cfg.depth_spread {
+            // The residuals of the finest step's last warp (at its final pose, or at an
+            // update it then rejected: close to it).
+            result.depth_spread = lp.depth_spread();
+        }
     }
     result
 }

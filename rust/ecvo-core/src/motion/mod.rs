@@ -40,6 +40,7 @@ use rayon::prelude::*;
 
 use crate::Pose;
 use crate::config::{MotionConfig, Weighting};
+use crate::noise::{DepthSpread, SpreadHistogram};
 use crate::prepare::{ImageLevel, PreparedFrame};
 use crate::scale::{PassSums, Scale, Whitener};
 use estimator::{Loops, Params};
@@ -106,6 +107,10 @@ pub struct MotionResult {
     pub start: u8,
     /// Converged, ran out of iterations, or failed.
     pub status: Status,
+    /// The raw depth residuals' robust spread per depth at the end of the finest step
+    /// (every 4th residual; empty unless [`MotionConfig::depth_spread`] and the call
+    /// succeeded): what [`crate::noise::NoiseFit`] fits the depth-noise model to.
+    pub depth_spread: DepthSpread,
 }
 
 impl MotionResult {
@@ -148,6 +153,8 @@ pub struct MotionEstimator {
     errors: Vec<f64>,
     /// Per-chunk sums of a scale pass, added in order.
     sums: Vec<(PassSums, f64)>,
+    /// Scratch of [`MotionResult::depth_spread`].
+    spread: SpreadHistogram,
 }
 
 impl MotionEstimator {
@@ -238,7 +245,7 @@ impl Loops for MotionEstimator {
             max: [(cam.width - 1) as f32, (cam.height - 1) as f32],
             samples: &level.samples,
             lambda: p.lambda,
-            quadratic: p.quadratic_noise,
+            noise: p.noise,
         };
         let n = self.used;
         let (template, bufs) = (&self.template[..n], &mut self.chunks[..n]);
@@ -300,6 +307,20 @@ impl Loops for MotionEstimator {
         total
     }
 
+    fn depth_spread(&mut self) -> DepthSpread {
+        self.spread.clear();
+        for c in &self.chunks[..self.used] {
+            // Every 4th residual: enough for 20 bins, a quarter of the cost.
+            for k in (0..c.n).step_by(4) {
+                let (rz, sz) = (c.rz[k], c.sz[k]);
+                if rz.is_finite() && sz > 0.0 {
+                    self.spread.add(c.z[k], rz / sz);
+                }
+            }
+        }
+        self.spread.spread()
+    }
+
     fn normal_equations(&mut self, level: &ImageLevel, wh: &Whitener) -> NormalEquations {
         let cam = level.camera();
         let f = [cam.fx as f32, cam.fy as f32];
@@ -325,6 +346,7 @@ pub(crate) fn scratch_bytes(max_points: usize) -> usize {
     let per_chunk_sums =
         size_of::<NormalEquations>() + size_of::<f64>() + size_of::<(PassSums, f64)>();
     chunks * (CHUNK.next_multiple_of(lanes::LANES) * per_point + 2 * per_chunk_sums)
+        + SpreadHistogram::BYTES
 }
 
 /// True when a loop over `chunks` chunks is worth handing to rayon: each of at least

@@ -4,6 +4,7 @@
 //! the poses.
 
 use super::estimator::{Loops, Params};
+use super::warp::NoiseGain;
 use super::{CHUNK, NormalEquations};
 use crate::Pose;
 use crate::config::Weighting;
@@ -39,7 +40,7 @@ impl Loops for Reference {
             max: [(cam.width - 1) as f32, (cam.height - 1) as f32],
             samples: &level.samples,
             lambda: p.lambda,
-            quadratic: p.quadratic_noise,
+            noise: p.noise,
         };
         self.chunks.clear();
         for pts in self.points.chunks(CHUNK) {
@@ -174,7 +175,7 @@ struct Warp<'a> {
     max: [f32; 2],
     samples: &'a [Sample],
     lambda: f32,
-    quadratic: bool,
+    noise: NoiseGain,
 }
 
 impl Warp<'_> {
@@ -202,13 +203,8 @@ impl Warp<'_> {
             let ri = s[0] - q[3];
             let rz = s[3] - z;
             let depth_ok = rz.is_finite() && s[4].is_finite() && s[5].is_finite();
-            // The depth residual's gain: λ, over z² for the quadratic noise model.
-            let sz = if self.quadratic {
-                let ze = z.max(0.3);
-                self.lambda / (ze * ze)
-            } else {
-                self.lambda
-            };
+            // The depth residual's gain: λ, or the noise model's at z.
+            let sz = self.noise.at(self.lambda, z);
             out.push(Residual {
                 ri,
                 rz: if depth_ok { sz * rz } else { f32::NAN },

@@ -6,6 +6,7 @@
 use super::estimator::{Loops, Params};
 use super::lanes::Lanes;
 use super::reference::Reference;
+use super::warp::NoiseGain;
 use super::*;
 use crate::camera::Camera;
 use crate::config::{Config, DepthNoiseModel, Mode, Preset};
@@ -50,12 +51,12 @@ fn affine_level(fy: f64) -> ImageLevel {
     }
 }
 
-fn params(weighting: Weighting, quadratic_noise: bool) -> Params {
+fn params(weighting: Weighting, noise: DepthNoiseModel) -> Params {
     Params {
         nu: 5.0,
         lambda: 1.0,
         weighting,
-        quadratic_noise,
+        noise: NoiseGain::of(noise, 1.0),
         scale_tolerance: 1e-3,
         zz_floor: 0.0,
     }
@@ -91,7 +92,7 @@ fn analytic_jacobians_match_finite_differences() {
             .collect();
         let t = se3::exp(&Vector6::new(0.02, -0.01, 0.03, 0.01, -0.02, 0.015));
         let mut est = MotionEstimator::new();
-        let params = params(Weighting::Bivariate, false);
+        let params = params(Weighting::Bivariate, DepthNoiseModel::Constant);
         est.load(&points);
         let n = est.warp(&t, &level, &params);
         assert_eq!(n, points.len());
@@ -272,25 +273,31 @@ fn loops_match_the_per_point_loops() {
             SynthCamera::phone_320x180(),
             DepthNoise::phone_like(),
             Weighting::Bivariate,
-            false,
+            DepthNoiseModel::Constant,
         ),
         (
             SynthCamera::phone_320x180(),
             DepthNoise::kinect_like(),
             Weighting::Scalar,
-            true,
+            DepthNoiseModel::Quadratic,
         ),
         (
             SynthCamera::tum_640x480(),
             DepthNoise::kinect_like(),
             Weighting::Bivariate,
-            true,
+            DepthNoiseModel::Quadratic,
+        ),
+        (
+            SynthCamera::tum_640x480(),
+            DepthNoise::kinect_like(),
+            Weighting::Bivariate,
+            DepthNoiseModel::Mixed { half_log2_alpha: 3 },
         ),
     ];
     simd::on_each_path(|path| {
-        for (k, &(camera, noise, weighting, quadratic)) in cases.iter().enumerate() {
+        for (k, &(camera, noise, weighting, model)) in cases.iter().enumerate() {
             let (cfg, fa, fb) = pair(camera, noise, 3 + k as u64, 10, 12, Mode::L2);
-            let p = params(weighting, quadratic);
+            let p = params(weighting, model);
             for (step, template) in cfg.motion.levels.iter().zip(&fa.templates) {
                 let level = &fb.levels[step.pyramid_level];
                 let (mut new, mut old) = (MotionEstimator::new(), Reference::default());

@@ -11,6 +11,7 @@
 //! same IEEE operations, in the same order, as the per-point warp this replaced.
 
 use super::lanes::LANES;
+use crate::config::DepthNoiseModel;
 use crate::prepare::Sample;
 use crate::prepare::simd::multiversion;
 
@@ -132,8 +133,60 @@ pub(super) struct Warp<'a> {
     pub(super) samples: &'a [Sample],
     /// λ.
     pub(super) lambda: f32,
-    /// The quadratic depth noise model.
-    pub(super) quadratic: bool,
+    /// The depth residual's gain as a function of depth.
+    pub(super) noise: NoiseGain,
+}
+
+/// The depth residual's gain as a function of the predicted depth z (metres, at
+/// least 0.3): λ, `λ / z²`, or `c / √(α + z⁴)` with `c = λ √(α + 1)`
+/// ([`DepthNoiseModel`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum NoiseGain {
+    /// λ.
+    Constant,
+    /// `λ / z²`.
+    Quadratic,
+    /// `c / √(α + z⁴)`.
+    Mixed {
+        /// α, m⁴.
+        alpha: f32,
+        /// `λ √(α + 1)`.
+        c: f32,
+    },
+}
+
+impl NoiseGain {
+    /// The gain of `model` for depth gain `lambda` (`Fitted` reads as `Quadratic`).
+    pub(super) fn of(model: DepthNoiseModel, lambda: f32) -> NoiseGain {
+        match model {
+            DepthNoiseModel::Constant => NoiseGain::Constant,
+            DepthNoiseModel::Quadratic | DepthNoiseModel::Fitted => NoiseGain::Quadratic,
+            DepthNoiseModel::Mixed { half_log2_alpha } => {
+                let alpha = 2f64.powf(half_log2_alpha as f64 / 2.0);
+                NoiseGain::Mixed {
+                    alpha: alpha as f32,
+                    c: (lambda as f64 * (alpha + 1.0).sqrt()) as f32,
+                }
+            }
+        }
+    }
+
+    /// The gain at predicted depth `z`.
+    #[inline(always)]
+    pub(super) fn at(self, lambda: f32, z: f32) -> f32 {
+        match self {
+            NoiseGain::Constant => lambda,
+            NoiseGain::Quadratic => {
+                let ze = z.max(0.3);
+                lambda / (ze * ze)
+            }
+            NoiseGain::Mixed { alpha, c } => {
+                let ze = z.max(0.3);
+                let z2 = ze * ze;
+                c / (alpha + z2 * z2).sqrt()
+            }
+        }
+    }
 }
 
 impl Warp<'_> {
@@ -190,7 +243,7 @@ impl Warp<'_> {
         );
         depth(
             self.lambda,
-            self.quadratic,
+            self.noise,
             &out.tmp[..n],
             &out.z[..n],
             &mut out.rz[..n],
@@ -379,7 +432,7 @@ multiversion! {
     /// its gradient is missing, and stores the gain `sz`.
     fn depth(
         lambda: f32,
-        quadratic: bool,
+        noise: NoiseGain,
         tmp: &[Sample],
         z: &[f32],
         rz: &mut [f32],
@@ -394,7 +447,7 @@ multiversion! {
 #[inline(always)]
 fn depth_kernel(
     lambda: f32,
-    quadratic: bool,
+    noise: NoiseGain,
     tmp: &[Sample],
     z: &[f32],
     rz: &mut [f32],
@@ -415,16 +468,31 @@ fn depth_kernel(
         dx[k] = v[4];
         dy[k] = v[5];
     }
+    // One loop per form, so that each vectorises without a branch on the form.
+    match noise {
+        NoiseGain::Constant => scale_depth(rz, sz, z, dx, dy, |_| lambda),
+        NoiseGain::Quadratic => scale_depth(rz, sz, z, dx, dy, |z| noise.at(lambda, z)),
+        NoiseGain::Mixed { .. } => scale_depth(rz, sz, z, dx, dy, |z| noise.at(lambda, z)),
+    }
+}
+
+/// `rz ← gain(z) (rz − z)`, NaN where the depth or its gradient is missing;
+/// `sz ← gain(z)`.
+#[inline(always)]
+fn scale_depth(
+    rz: &mut [f32],
+    sz: &mut [f32],
+    z: &[f32],
+    dx: &[f32],
+    dy: &[f32],
+    gain: impl Fn(f32) -> f32,
+) {
+    let n = rz.len();
+    let (sz, z, dx, dy) = (&mut sz[..n], &z[..n], &dx[..n], &dy[..n]);
     for k in 0..n {
         let r = rz[k] - z[k];
         let ok = r.is_finite() & dx[k].is_finite() & dy[k].is_finite();
-        // The depth residual's gain: λ, over z² for the quadratic noise model.
-        let s = if quadratic {
-            let ze = z[k].max(0.3);
-            lambda / (ze * ze)
-        } else {
-            lambda
-        };
+        let s = gain(z[k]);
         rz[k] = if ok { s * r } else { f32::NAN };
         sz[k] = s;
     }
