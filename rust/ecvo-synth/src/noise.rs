@@ -178,8 +178,9 @@ impl DepthNoise {
     /// low-noise case: σ = 1 mm + 0.3 % of z (4 mm at 1 m, 7 mm at 2 m, 13 mm at 4 m;
     /// Kinect v1's 1.4 mm·z² is 22 mm at 4 m), no disparity quantisation, 0.1–5 m,
     /// dropouts beyond 80° incidence, 1 % random holes, holes where the return
-    /// `intensity / 255 / z²` falls below 0.02 (mid-grey from about 4 m, dark surfaces
-    /// from about 3 m), a mixed foreground/background depth on a quarter of the pixels
+    /// `intensity / 255 / z²` is weak (below 0.01, thinning out below 0.02: mid-grey
+    /// is measured out to the 5 m range, a surface at a fifth of full brightness thins
+    /// out from 3.2 m and is gone beyond 4.5 m), a mixed foreground/background depth on a quarter of the pixels
     /// next to a depth jump above 5 % (flying pixels, not holes), 1.5 gray levels of
     /// image noise. Use it with millimetre depth (`depth_scale` 1000).
     ///
@@ -193,8 +194,11 @@ impl DepthNoise {
     /// The noise here is independent per pixel. The frames have 13–17 % of pixels
     /// missing (a whole first row, then more on the far, dark lower part of the far
     /// frame), their confidence bits fall with distance (the far frame's pixels beyond
-    /// 2 m are nearly all at the lowest confidence, some valid out to 7.5 m), and about
-    /// a fifth of the pixels beside a depth jump hold an in-between depth.
+    /// 2 m are nearly all at the lowest confidence, but still valid, out to 3.7 m and
+    /// beyond), and about a fifth of the pixels beside a depth jump hold an in-between
+    /// depth. With the 5 m range and the weak-return rule, 82 % of the depth of the
+    /// slow walk round the standard room is valid (92 % with blank walls, texture
+    /// contrast 0.02), near those frames' 83–87 %.
     pub fn tof_like() -> Self {
         Self {
             sigma_at_1m: 0.0,
@@ -205,7 +209,7 @@ impl DepthNoise {
             grazing_max_angle_deg: 80.0,
             edge_dropout: None,
             random_dropout: 0.01,
-            low_signal: Some(LowSignal { min_signal: 0.02 }),
+            low_signal: Some(LowSignal { min_signal: 0.01 }),
             flying_pixels: Some(FlyingPixels {
                 relative_jump: 0.05,
                 probability: 0.25,
