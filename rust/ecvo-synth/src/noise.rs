@@ -180,9 +180,9 @@ impl DepthNoise {
     /// dropouts beyond 80° incidence, 1 % random holes, holes where the return
     /// `intensity / 255 / z²` is weak (below 0.01, thinning out below 0.02: mid-grey
     /// is measured out to the 5 m range, a surface at a fifth of full brightness thins
-    /// out from 3.2 m and is gone beyond 4.5 m), a mixed foreground/background depth on a quarter of the pixels
-    /// next to a depth jump above 5 % (flying pixels, not holes), 1.5 gray levels of
-    /// image noise. Use it with millimetre depth (`depth_scale` 1000).
+    /// out from 3.2 m and is gone beyond 4.5 m), a mixed foreground/background depth
+    /// on a quarter of the pixels next to a depth jump above 5 % (flying pixels, not
+    /// holes), 1.5 gray levels of image noise. Use it with millimetre depth (`depth_scale` 1000).
     ///
     /// Why these numbers: in the two real `DEPTH16` frames of
     /// `datasets/phone_tof_samples` (240x180, one at 0.5–1.2 m, one at 1–4 m) the

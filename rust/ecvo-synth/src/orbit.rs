@@ -43,8 +43,8 @@ impl Scene {
     /// A hall for viewing its walls from `depth` metres (1–4.5): a regular octagon of
     /// apothem [`hall_apothem`]`(depth)` (a square room, floor at z = 0, 3 m high,
     /// centred on the z axis, whose corners are cut off by four boxes turned by 45°),
-    /// with cabinets, chests, shelves and wall-mounted boxes in front of six of the
-    /// eight walls and the middle left free for the camera. Every texture is
+    /// with cabinets, chests, shelves and wall-mounted boxes in front of seven of
+    /// the eight walls and the middle left free for the camera. Every texture is
     /// stretched by `depth / 2` (clamped to 0.5–2), as for the fast path, so that the
     /// detail in pixels is about that of the standard room from 2 m. The geometry
     /// depends on `depth` only; `seed` only changes the textures.
@@ -116,13 +116,14 @@ impl CameraPath {
     /// circle of radius [`ORBIT_RADIUS_M`] round the hall's centre at 1.5 m height,
     /// facing outward (a little down), so that it pans round the hall's walls and
     /// furniture at a viewing distance of about `depth`, and its peak rotation rate over
-    /// 30 Hz frames is exactly `max_angular_speed` (rad/s): a steady pan (the walk's
-    /// rate) plus hand-held jitter (sway of about 2 cm and a 7–9 Hz shake of about
-    /// 1.5 mm in position; pan, tilt and roll wobble), the jitter alone reaching
-    /// a fifth of the peak. The direction of the walk, its start and the jitter come
-    /// from `seed`. The jitter is periodic with [`crate::FAST_PERIOD_S`] and the steady pan
-    /// turns the whole path, so any 150 frames at 30 Hz reach the peak. Linear speed:
-    /// the walk's `0.3 m × rate` plus the sway (about 0.35 m/s at 60°/s).
+    /// 30 Hz frames is `max_angular_speed` (rad/s; to within the 30 Hz sampling): a
+    /// steady pan (the walk's rate) plus hand-held jitter (sway of about 2 cm and a
+    /// 7–9 Hz shake of about 1.5 mm in position; pan, tilt and roll wobble), the
+    /// jitter alone reaching a fifth of the peak. The direction of the walk, its start and the jitter come
+    /// from `seed`. The jitter is periodic with [`crate::FAST_PERIOD_S`] and the steady
+    /// pan turns the whole path, so any 150 frames at 30 Hz reach the peak. Linear speed:
+    /// the walk's `0.3 m × rate` plus the sway (peaks of 0.28 m/s at 30°/s, 0.42 m/s
+    /// at 60°/s).
     ///
     /// # Panics
     /// If `depth` is outside [`ORBIT_DEPTH_RANGE_M`] or the speed is not positive.
