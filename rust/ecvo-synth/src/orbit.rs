@@ -119,11 +119,11 @@ impl CameraPath {
     /// 30 Hz frames is `max_angular_speed` (rad/s; to within the 30 Hz sampling): a
     /// steady pan (the walk's rate) plus hand-held jitter (sway of about 2 cm and a
     /// 7–9 Hz shake of about 1.5 mm in position; pan, tilt and roll wobble), the
-    /// jitter alone reaching a fifth of the peak. The direction of the walk, its start and the jitter come
-    /// from `seed`. The jitter is periodic with [`crate::FAST_PERIOD_S`] and the steady
-    /// pan turns the whole path, so any 150 frames at 30 Hz reach the peak. Linear speed:
-    /// the walk's `0.3 m × rate` plus the sway (peaks of 0.28 m/s at 30°/s, 0.42 m/s
-    /// at 60°/s).
+    /// jitter alone reaching a fifth of the peak. The direction of the walk, its start
+    /// and the jitter come from `seed`. The jitter is periodic with
+    /// [`crate::FAST_PERIOD_S`] and the steady pan turns the whole path, so any 150
+    /// frames at 30 Hz reach the peak. Linear speed: the walk's `0.3 m × rate` plus the
+    /// sway (peaks of 0.28 m/s at 30°/s, 0.42 m/s at 60°/s).
     ///
     /// # Panics
     /// If `depth` is outside [`ORBIT_DEPTH_RANGE_M`] or the speed is not positive.
