@@ -44,7 +44,8 @@ fn per_frame_rotation_peaks_at_the_requested_rate_and_stays_near_it() {
             .to_degrees();
         let vmax = lin.iter().cloned().fold(0.0, f64::max) * 30.0;
         println!(
-            "{deg_per_frame} deg/frame at {depth} m: peak {peak:.3} mean {mean:.3} min {min:.3} deg/frame, peak {vmax:.2} m/s"
+            "{deg_per_frame} deg/frame at {depth} m: peak {peak:.3} mean {mean:.3} \
+             min {min:.3} deg/frame, peak {vmax:.2} m/s"
         );
         assert!(
             (peak - deg_per_frame).abs() < 0.02 * deg_per_frame,
