@@ -196,20 +196,24 @@ enum Command {
         /// Timestamp of the first frame, seconds.
         #[arg(long, default_value_t = 1_700_000_000.0)]
         start_time: f64,
-        /// Camera motion: the slow hand-held walk around the room, or fast hand-held
+        /// Camera motion: the slow hand-held walk around the room, fast hand-held
         /// shaking and panning in front of a wall (see --depth, --max-rot-speed,
-        /// --max-speed).
+        /// --max-speed), or a far-depth hand-held orbit panning round a hall (see
+        /// --depth, --max-rot-speed).
         #[arg(long, value_enum, default_value_t = Motion::Slow)]
         motion: Motion,
         /// Fast motion: distance from the camera to the wall it looks at, metres
-        /// (0.4–4.5; the mean viewing depth is within about 10 % of it).
+        /// (0.4–4.5, default 2; the mean viewing depth is within about 10 % of it).
+        /// Orbit: viewing distance of the hall's walls, metres (1–4.5, default 2.5;
+        /// the mean viewing depth is within about 4 % of it).
         #[arg(long)]
         depth: Option<f64>,
         /// Texture contrast of every surface, (0, 1]: 1 is the standard room, 0.05 a
         /// room of nearly blank walls (the shading of each face still differs).
         #[arg(long, default_value_t = 1.0)]
         texture_contrast: f64,
-        /// Fast motion: peak rotation rate between frames, degrees per second.
+        /// Fast motion and orbit: peak rotation rate between frames, degrees per
+        /// second (default 90 for fast, 45 for orbit: 1.5° a frame at 30 Hz).
         #[arg(long)]
         max_rot_speed: Option<f64>,
         /// Fast motion: peak speed between frames, metres per second.

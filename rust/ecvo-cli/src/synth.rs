@@ -7,7 +7,8 @@ use anyhow::{Context, Result, bail};
 use ecvo_core::Camera;
 use ecvo_io::{SequenceWriter, Trajectory};
 use ecvo_synth::{
-    DepthNoise, FAST_MAX_ANGULAR_SPEED, FAST_MAX_LINEAR_SPEED, SynthCamera, SynthSequence,
+    DepthNoise, FAST_MAX_ANGULAR_SPEED, FAST_MAX_LINEAR_SPEED, ORBIT_DEPTH_RANGE_M, SynthCamera,
+    SynthSequence,
 };
 
 /// The sensor noise model of `ecvo synth --noise`.
@@ -19,6 +20,9 @@ pub enum Noise {
     Phone,
     /// Kinect v1: σ = 1.4 mm·z², disparity quantisation, shadows, holes.
     Kinect,
+    /// A phone's time-of-flight sensor: σ = 1 mm + 0.3 % of z, millimetre depth, no
+    /// quantisation, flying pixels at depth jumps, holes on dark and far surfaces.
+    Tof,
 }
 
 impl Noise {
@@ -27,6 +31,7 @@ impl Noise {
             Noise::None => DepthNoise::none(),
             Noise::Phone => DepthNoise::phone_like(),
             Noise::Kinect => DepthNoise::kinect_like(),
+            Noise::Tof => DepthNoise::tof_like(),
         }
     }
 }
@@ -38,6 +43,9 @@ pub enum Motion {
     Slow,
     /// Fast hand-held motion in front of a wall (`CameraPath::fast_handheld`).
     Fast,
+    /// A far-depth hand-held orbit panning round a hall's walls
+    /// (`CameraPath::far_orbit` in `Scene::hall`).
+    Orbit,
 }
 
 /// The image size and camera of `ecvo synth --size`.
@@ -56,9 +64,11 @@ pub enum Size {
 pub struct MotionArgs {
     /// Slow or fast.
     pub motion: Motion,
-    /// Fast only: distance to the wall looked at, metres (default 2).
+    /// Fast and orbit: distance to the walls looked at, metres (default 2 for fast,
+    /// 2.5 for orbit).
     pub depth: Option<f64>,
-    /// Fast only: peak rotation rate, degrees per second (default 90).
+    /// Fast and orbit: peak rotation rate, degrees per second (default 90 for fast,
+    /// 45 for orbit).
     pub max_rot_speed_deg: Option<f64>,
     /// Fast only: peak speed, metres per second (default 1).
     pub max_speed: Option<f64>,
@@ -71,7 +81,7 @@ pub struct MotionArgs {
 
 impl MotionArgs {
     /// The sequence (noise still the preset's), or an error naming the flag that is out
-    /// of range or given without `--motion fast`.
+    /// of range or given with a motion that has no use for it.
     fn sequence(&self, frames: usize, seed: u64) -> Result<SynthSequence> {
         let c = self.texture_contrast;
         if !(c > 0.0 && c <= 1.0) {
@@ -96,7 +106,7 @@ impl MotionArgs {
                     ("--max-speed", self.max_speed.is_some()),
                 ] {
                     if given {
-                        bail!("{flag} needs --motion fast");
+                        bail!("{flag} needs --motion fast or orbit");
                     }
                 }
                 Ok(SynthSequence::phone_320x180(frames, seed))
@@ -123,12 +133,35 @@ impl MotionArgs {
                     frames, seed, depth, w, v,
                 ))
             }
+            Motion::Orbit => {
+                if self.max_speed.is_some() {
+                    bail!("--max-speed needs --motion fast");
+                }
+                let depth = self.depth.unwrap_or(2.5);
+                let (lo, hi) = ORBIT_DEPTH_RANGE_M;
+                if !(lo..=hi).contains(&depth) {
+                    bail!(
+                        "--depth must be between {lo} and {hi} m with --motion orbit, got {depth}"
+                    );
+                }
+                let w = self.max_rot_speed_deg.unwrap_or(45.0);
+                if !(w > 0.0 && w <= 180.0) {
+                    bail!("--max-rot-speed must be in (0, 180] deg/s with --motion orbit, got {w}");
+                }
+                Ok(SynthSequence::orbit_320x180(
+                    frames,
+                    seed,
+                    depth,
+                    w.to_radians(),
+                ))
+            }
         }
     }
 }
 
 /// Renders `frames` frames of [`SynthSequence::phone_320x180`] with `seed` (or of
-/// [`SynthSequence::fast_handheld_320x180`] with `--motion fast`) and writes them to `out` (TUM
+/// [`SynthSequence::fast_handheld_320x180`] with `--motion fast`, of
+/// [`SynthSequence::orbit_320x180`] with `--motion orbit`) and writes them to `out` (TUM
 /// layout, `camera.json`, `groundtruth.txt`). Frame `i` is stamped
 /// `start_time + i / 30` seconds (as written, to the microsecond); the ground truth
 /// holds exactly the rendered poses at those stamps.
@@ -148,6 +181,10 @@ pub fn synth_command(
     }
     let mut seq = motion.sequence(frames, seed)?;
     seq.noise = noise.model();
+    if noise == Noise::Tof {
+        // A phone's DEPTH16: millimetres whatever the image size.
+        seq.camera.depth_scale = 1000.0;
+    }
     let c = seq.camera;
     let camera = Camera {
         width: c.width,

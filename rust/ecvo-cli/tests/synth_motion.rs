@@ -117,6 +117,18 @@ fn motion_flags_are_checked() {
             "--max-speed must be",
         ),
         (
+            vec!["--motion", "orbit", "--max-speed", "1"],
+            "--max-speed needs --motion fast",
+        ),
+        (
+            vec!["--motion", "orbit", "--depth", "0.5"],
+            "--depth must be between 1 and 4.5 m",
+        ),
+        (
+            vec!["--motion", "orbit", "--max-rot-speed", "200"],
+            "--max-rot-speed must be",
+        ),
+        (
             vec!["--texture-contrast", "0"],
             "--texture-contrast must be",
         ),

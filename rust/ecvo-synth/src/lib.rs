@@ -5,17 +5,21 @@
 //!   3-D hit point, with view-independent shading, so brightness constancy holds exactly.
 //! * [`render`]: intensity (anti-aliased, 5 samples per pixel), exact pixel-centre depth (camera z), viewing
 //!   angle and surface ids for a camera-to-world pose.
-//! * [`DepthNoise`] / [`apply_noise`]: sensor noise (depth-squared Gaussian noise,
-//!   disparity quantisation, grazing-angle, edge and random dropouts, image noise).
+//! * [`DepthNoise`] / [`apply_noise`]: sensor noise (Gaussian depth noise growing with
+//!   depth, disparity quantisation, grazing-angle, edge, weak-signal and random
+//!   dropouts, flying pixels, image noise; Kinect, phone, time-of-flight presets).
 //! * [`CameraPath`]: smooth analytic trajectories (orbit, slow hand-held walk, fast
-//!   hand-held shaking and panning at a chosen depth).
+//!   hand-held shaking and panning at a chosen depth, a far-depth hand-held orbit
+//!   panning round [`Scene::hall`]).
 //! * [`SynthSequence`]: everything together, frame by frame
-//!   ([`SynthSequence::phone_320x180`], [`SynthSequence::fast_320x180`]).
+//!   ([`SynthSequence::phone_320x180`], [`SynthSequence::fast_320x180`],
+//!   [`SynthSequence::orbit_320x180`]).
 //!
 //! Pure and deterministic: no I/O, no threads, no global state.
 
 mod camera;
 mod noise;
+mod orbit;
 mod path;
 mod render;
 pub mod rng;
@@ -23,7 +27,11 @@ mod scene;
 mod sequence;
 
 pub use camera::SynthCamera;
-pub use noise::{DepthNoise, EdgeDropout, apply_noise, edge_mask, metres_to_raw, to_raw_depth};
+pub use noise::{
+    DepthNoise, EdgeDropout, FlyingPixels, LowSignal, apply_noise, edge_mask, metres_to_raw,
+    to_raw_depth,
+};
+pub use orbit::{ORBIT_DEPTH_RANGE_M, ORBIT_RADIUS_M, hall_apothem};
 pub use path::{CameraPath, FAST_PERIOD_S, Harmonic, look_at};
 pub use render::{NO_SURFACE, Rendered, render, render_supersampled};
 pub use scene::{Hit, ROOM_SURFACES, RayOrigin, Scene, SceneBox, Texture};

@@ -73,6 +73,13 @@ pub struct CameraPath {
     pub target_wobble: [Vec<Harmonic>; 3],
     /// Roll about the optical axis, radians.
     pub roll: Vec<Harmonic>,
+    /// `Some(d)`: the camera looks outward from the orbit centre instead of at
+    /// `target`: at the point `d` metres from its orbit position (without the position
+    /// wobble) along the orbit's radial direction (at the height of `target`), with `target_wobble`
+    /// read as offsets along that direction, across it (horizontal, towards the
+    /// increasing orbit angle) and up (world z), so that the wobble pans and tilts the
+    /// same way whichever way the camera faces.
+    pub look_outward: Option<f64>,
 }
 
 /// Camera-to-world rotation looking from `eye` towards `target` with image y as close
@@ -101,6 +108,7 @@ impl CameraPath {
             target: centre,
             target_wobble: Default::default(),
             roll: Vec::new(),
+            look_outward: None,
         }
     }
 
@@ -137,12 +145,18 @@ impl CameraPath {
                 vec![h(&mut rng, 0.15, 0.3, 0.5)],
             ],
             roll: vec![h(&mut rng, 0.05, 0.4, 0.6), h(&mut rng, 0.004, 6.0, 8.0)],
+            look_outward: None,
         }
+    }
+
+    /// Orbit angle at time `t` (seconds), radians.
+    fn angle_at(&self, t: f64) -> f64 {
+        self.angle0 + self.angular_rate * t + sum(&self.angle_wobble, t)
     }
 
     /// Camera position at time `t` (seconds).
     pub fn position_at(&self, t: f64) -> Point3<f64> {
-        let theta = self.angle0 + self.angular_rate * t + sum(&self.angle_wobble, t);
+        let theta = self.angle_at(t);
         let [wx, wy, wz] = &self.position_wobble;
         Point3::new(
             self.orbit_centre.x + self.radius_x * theta.cos() + sum(wx, t),
@@ -154,7 +168,19 @@ impl CameraPath {
     /// Look-at target at time `t` (seconds).
     pub fn target_at(&self, t: f64) -> Point3<f64> {
         let [tx, ty, tz] = &self.target_wobble;
-        self.target + Vector3::new(sum(tx, t), sum(ty, t), sum(tz, t))
+        let Some(distance) = self.look_outward else {
+            return self.target + Vector3::new(sum(tx, t), sum(ty, t), sum(tz, t));
+        };
+        let theta = self.angle_at(t);
+        let (s, c) = theta.sin_cos();
+        let radial = Vector3::new(c, s, 0.0);
+        let across = Vector3::new(-s, c, 0.0);
+        let base = Point3::new(
+            self.orbit_centre.x + self.radius_x * c,
+            self.orbit_centre.y + self.radius_y * s,
+            self.target.z,
+        );
+        base + radial * (distance + sum(tx, t)) + across * sum(ty, t) + Vector3::z() * sum(tz, t)
     }
 
     /// Camera-to-world pose at time `t` (seconds); camera looks along its +z axis,
@@ -184,7 +210,7 @@ const FAST_Y_M: f64 = 0.9;
 /// A harmonic of [`CameraPath::fast_handheld`]: random whole multiple `k` of the base
 /// frequency `2π / FAST_PERIOD_S` in `k_lo..=k_hi`, random phase, unit amplitude
 /// times `weight`.
-fn fast_harmonic(rng: &mut Rng, weight: f64, k_lo: u64, k_hi: u64) -> Harmonic {
+pub(crate) fn fast_harmonic(rng: &mut Rng, weight: f64, k_lo: u64, k_hi: u64) -> Harmonic {
     let k = k_lo + rng.next_u64() % (k_hi - k_lo + 1);
     Harmonic {
         amplitude: weight,
@@ -194,7 +220,7 @@ fn fast_harmonic(rng: &mut Rng, weight: f64, k_lo: u64, k_hi: u64) -> Harmonic {
 }
 
 /// Scales the amplitudes of harmonics.
-fn scaled(terms: &[Harmonic], s: f64) -> Vec<Harmonic> {
+pub(crate) fn scaled(terms: &[Harmonic], s: f64) -> Vec<Harmonic> {
     terms
         .iter()
         .map(|h| Harmonic {
@@ -274,6 +300,7 @@ impl CameraPath {
                 target: Point3::new(3.0, FAST_Y_M, FAST_HEIGHT_M),
                 target_wobble: target,
                 roll: scaled(&roll, sr),
+                look_outward: None,
             }
         };
         let dt = 1.0 / 30.0;
