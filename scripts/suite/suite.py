@@ -215,6 +215,14 @@ def cmd_run(args):
                 what = f"FAILED: {r['error']}"
             print(f"[{done}/{len(cells)}] {r['id']}: {what}", flush=True)
     wall = time.monotonic() - start
+    if args.groups:
+        # A run of some groups keeps the label's other groups (same flags and binary).
+        old_path = os.path.join(label_dir, "results.json")
+        if os.path.isfile(old_path):
+            with open(old_path) as f:
+                old = json.load(f)
+            if old.get("flags") == flags and old.get("ecvo_sha256") == binary_sha:
+                records += [r for r in old.get("cells", []) if r.get("group") not in wanted]
     failed = [r["id"] for r in records if r["status"] != "ok"]
     results = {"label": args.label, "ecvo": ecvo, "ecvo_sha256": binary_sha, "flags": flags,
                "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),

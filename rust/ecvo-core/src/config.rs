@@ -370,7 +370,7 @@ impl Config {
                 weighting: Weighting::Bivariate,
                 fine_weighting: None,
                 max_fine_depth_weight: 4.0,
-                depth_noise: DepthNoiseModel::Quadratic,
+                depth_noise: DepthNoiseModel::Fitted,
                 depth_spread: false,
                 prior: MotionPrior::ConstantVelocity,
                 max_intensity_sigma: 0.2,

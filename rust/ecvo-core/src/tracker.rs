@@ -15,7 +15,9 @@ use nalgebra::Matrix6;
 
 use crate::Pose;
 use crate::camera::{Camera, FrameView};
-use crate::config::{Config, DepthNoiseModel, MotionConfig, MotionPrior, ReferenceLevel, Weighting};
+use crate::config::{
+    Config, DepthNoiseModel, MotionConfig, MotionPrior, ReferenceLevel, Weighting,
+};
 pub use crate::correction::correction_distance;
 use crate::correction::{chain_step, fuse_correction};
 pub use crate::counters::Counters;
@@ -376,9 +378,9 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
                 became = k + 1;
                 continue;
             }
-            let r =
-                self.estimator
-                    .motion(&frame, &reference.frame, &accumulated, &self.motion);
+            let r = self
+                .estimator
+                .motion(&frame, &reference.frame, &accumulated, &self.motion);
             out.motion_estimations += 1;
             self.counters.motion_estimations += 1;
             if !r.is_ok() {

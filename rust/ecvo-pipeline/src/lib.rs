@@ -90,8 +90,7 @@ use std::time::{Duration, Instant};
 use crossbeam_channel::{Receiver, SendTimeoutError, Sender, TrySendError};
 use ecvo_core::{
     Camera, Config, Counters, FrameOutput, FrameView, MotionEstimator, Pose, Preparer, Tracker,
-    TrackingState, frame_to_frame,
-    tracker::working_motion,
+    TrackingState, frame_to_frame, tracker::working_motion,
 };
 
 pub use geometry::{CloudPoint, GeometryOptions};

@@ -215,6 +215,7 @@ impl EngineSettings {
                 &[
                     ("constant", DepthNoiseModel::Constant),
                     ("quadratic", DepthNoiseModel::Quadratic),
+                    ("fitted", DepthNoiseModel::Fitted),
                 ],
             )?,
             prior: choice(

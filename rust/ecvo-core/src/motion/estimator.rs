@@ -5,11 +5,11 @@
 
 use nalgebra::{Matrix6, SymmetricEigen};
 
+use super::warp::NoiseGain;
 use super::{Failure, MAX_STARTS, MAX_STEPS, MotionResult, NormalEquations, Status};
 use crate::Pose;
-use crate::noise::DepthSpread;
-use super::warp::NoiseGain;
 use crate::config::{MotionConfig, MotionLevel, Weighting};
+use crate::noise::DepthSpread;
 use crate::prepare::{ImageLevel, PreparedFrame};
 use crate::scale::{self, PassSums, Scale, Whitener};
 use crate::se3;

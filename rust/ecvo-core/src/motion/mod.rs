@@ -13,7 +13,8 @@
 //! `(r_I, λ r_Z)`). With
 //! [`DepthNoiseModel::Quadratic`](crate::config::DepthNoiseModel::Quadratic) the depth
 //! residual is divided by z², so the scale describes the depth noise at 1 m and far
-//! points count less.
+//! points count less; the default, `Fitted`, has the tracker fit the shape of that
+//! growth to the residuals ([`crate::noise`]).
 //! Gauss-Newton on a left perturbation `T ← exp(δ) T` runs coarse to fine on the image
 //! pyramid; an update that raises the robust cost at its scale, or leaves too few
 //! residuals, is undone and ends its step. The result reports `T_{i,j} = T⁻¹`, the

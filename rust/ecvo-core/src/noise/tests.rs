@@ -25,7 +25,11 @@ fn registration(a: f64, b: f64, n: usize, seed: u64) -> DepthSpread {
     for k in 0..n {
         let z = 0.5 + 3.5 * (k as f64 + 0.5) / n as f64;
         let sigma = (a + b * z.powi(4)).sqrt();
-        let r = if k % 20 == 7 { 0.2 * rng.next() } else { sigma * rng.next() };
+        let r = if k % 20 == 7 {
+            0.2 * rng.next()
+        } else {
+            sigma * rng.next()
+        };
         h.add(z as f32, r as f32);
     }
     h.spread()
@@ -91,7 +95,10 @@ fn the_fit_recovers_known_noise_including_none() {
     let f = fit(0.0, 0.0, 24);
     assert_eq!(f.model(), DepthNoiseModel::Constant);
     let (a, b) = f.coefficients().expect("fitted");
-    assert!(a > 0.0 && a.sqrt() < 2.0 * 1.4826 * R_MIN as f64, "floor {a}");
+    assert!(
+        a > 0.0 && a.sqrt() < 2.0 * 1.4826 * R_MIN as f64,
+        "floor {a}"
+    );
     assert!(b < 1e-6 * a, "no z⁴ term: {b}");
 
     // A Kinect: σ = 1.4 mm · z².
@@ -131,7 +138,9 @@ fn the_model_holds_still_on_steady_noise_and_waits_for_data() {
     assert_eq!(f.model(), DepthNoiseModel::Quadratic);
     let mut changes = 0;
     for k in 0..200 {
-        changes += f.record(&registration(0.002f64.powi(2), 0.001f64.powi(2), 6000, k)).is_some() as u32;
+        changes += f
+            .record(&registration(0.002f64.powi(2), 0.001f64.powi(2), 6000, k))
+            .is_some() as u32;
     }
     assert_eq!(changes, 1, "one move to the fitted shape, then it stays");
     // Empty spreads (failed calls, the spread not measured) change nothing.
@@ -158,7 +167,10 @@ fn the_model_holds_still_on_steady_noise_and_waits_for_data() {
 fn models_map_to_the_grid() {
     assert_eq!(model_of(1.0, 0.0), DepthNoiseModel::Constant);
     assert_eq!(model_of(0.0, 1.0), DepthNoiseModel::Quadratic);
-    assert_eq!(model_of(4.0, 1.0), DepthNoiseModel::Mixed { half_log2_alpha: 4 });
+    assert_eq!(
+        model_of(4.0, 1.0),
+        DepthNoiseModel::Mixed { half_log2_alpha: 4 }
+    );
     assert_eq!(model_of(1e-6, 1.0), DepthNoiseModel::Quadratic);
     assert_eq!(model_of(1e6, 1.0), DepthNoiseModel::Constant);
 }

@@ -125,7 +125,7 @@ class Tracker:
     ``ecvo run`` with underscores: ``levels`` ("30mm:7deg,120mm:12deg"),
     ``bilateral``, ``normal_filter``, ``contour_filter`` (bools, default True),
     ``paper`` (bool), ``schedule``, ``point_budget`` (str), ``weighting``
-    ("scalar", "bivariate", "hybrid"), ``depth_noise`` ("constant", "quadratic"),
+    ("scalar", "bivariate", "hybrid"), ``depth_noise`` ("constant", "quadratic", "fitted": the default),
     ``prior`` ("identity", "velocity"), ``max_correction_distance``,
     ``max_fine_depth_weight``, ``min_predicted_decrease``, ``min_update_px``
     (floats), ``scale_passes``, ``refine_every`` (ints), ``corrections`` ("fuse",
