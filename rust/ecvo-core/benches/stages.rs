@@ -22,7 +22,7 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use ecvo_core::{
     Camera, Config, FrameView, Mode, MotionEstimator, PreparedFrame, Preparer, Preset,
-    frame_to_frame,
+    frame_to_frame, tracker::working_motion,
 };
 use ecvo_synth::{SynthCamera, SynthFrame, SynthSequence};
 
@@ -111,11 +111,14 @@ fn benches(c: &mut Criterion) {
         group.finish();
 
         let mut group = c.benchmark_group("motion");
+        // The tracker's settings: with the fitted depth-noise model, its starting model
+        // and the depth spread measured.
+        let motion = working_motion(&config.motion);
         group.bench_function(name, |b| {
             let mut estimator = MotionEstimator::new();
             pool.install(|| {
                 b.iter(|| {
-                    let r = frame_to_frame(&mut estimator, &fc, &fp, None, &config);
+                    let r = frame_to_frame(&mut estimator, &fc, &fp, None, &motion);
                     black_box(r.pose)
                 })
             })
