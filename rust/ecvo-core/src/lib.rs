@@ -22,6 +22,7 @@ pub mod error;
 pub mod memory;
 pub mod motion;
 pub mod noise;
+pub mod odometry;
 pub mod prepare;
 pub mod prior;
 pub mod scale;

@@ -1,0 +1,104 @@
+//! \[A\] as a free function (the pipeline's filter stage computes it ahead), the
+//! settings a tracker's `MOTION` calls start from, and the sequential engine
+//! [`Odometry`] (prepare, then track, recycling prepared frames).
+
+use std::sync::Arc;
+
+use crate::Pose;
+use crate::camera::{Camera, FrameView};
+use crate::config::{Config, DepthNoiseModel, MotionConfig};
+use crate::error::Result;
+use crate::motion::{MotionEstimator, MotionResult};
+use crate::prepare::{PreparedFrame, Preparer};
+use crate::tracker::{FrameOutput, Tracker};
+
+/// \[A\] of Figure 1(b): `MOTION(Fc, Fp, ·)`, the motion from the current frame to the
+/// previous one, from the identity and, when given, from the constant-velocity
+/// prediction `prior` (the better start at the coarsest step wins). It depends on
+/// the two frames and the prior alone, so it may run before the tracker reaches
+/// `current` (the pipeline's filter stage does so when the tracker is behind) and
+/// be handed to [`Tracker::track_with`].
+pub fn frame_to_frame(
+    estimator: &mut MotionEstimator,
+    current: &PreparedFrame,
+    previous: &PreparedFrame,
+    prior: Option<&Pose>,
+    motion: &MotionConfig,
+) -> MotionResult {
+    match prior {
+        Some(p) => estimator.motion_from(current, previous, &[Pose::identity(), *p], motion),
+        None => estimator.motion(current, previous, &Pose::identity(), motion),
+    }
+}
+
+/// The settings a tracker starts its `MOTION` calls with for `motion`: under
+/// [`DepthNoiseModel::Fitted`], `Quadratic` until the fit moves it, and the depth
+/// spread measured.
+pub fn working_motion(motion: &MotionConfig) -> MotionConfig {
+    let mut m = motion.clone();
+    if m.depth_noise == DepthNoiseModel::Fitted {
+        m.depth_noise = DepthNoiseModel::Quadratic;
+        m.depth_spread = true;
+    }
+    m
+}
+
+/// The sequential engine: prepares each frame and tracks it, recycling prepared
+/// frames so that memory stays constant and a warm engine does not allocate.
+pub struct Odometry {
+    preparer: Preparer,
+    tracker: Tracker<Arc<PreparedFrame>>,
+    pool: Vec<Arc<PreparedFrame>>,
+}
+
+impl Odometry {
+    /// An engine for `config`; fails on an invalid configuration, and on one whose
+    /// memory ([`crate::memory::estimate`]) exceeds [`Config::memory_budget`]
+    /// ([`crate::Error::MemoryBudget`]), before allocating anything.
+    pub fn new(config: Config) -> Result<Self> {
+        config.validate()?;
+        crate::memory::check_budget(crate::memory::estimate(&config).bytes, config.memory_budget)?;
+        let tracker = Tracker::new(config)?;
+        Ok(Odometry {
+            preparer: Preparer::new(tracker.config()),
+            tracker,
+            pool: Vec::new(),
+        })
+    }
+
+    /// Prepares and tracks one frame; fails only on a frame that does not match the
+    /// camera (wrong buffer sizes, non-finite timestamp).
+    pub fn push(&mut self, view: FrameView<'_>) -> Result<FrameOutput> {
+        // A pooled frame that only the pool still holds is free for reuse.
+        let slot = self.pool.iter().position(|f| Arc::strong_count(f) == 1);
+        let mut frame = match slot {
+            Some(i) => self.pool.swap_remove(i),
+            // Reserved at full size, so that memory is what `memory::estimate` says.
+            None => Arc::new(PreparedFrame::for_config(self.tracker.config())),
+        };
+        let prepared = Arc::get_mut(&mut frame).expect("a free pooled frame has one owner");
+        if let Err(e) = self.preparer.prepare_into(view, prepared) {
+            self.pool.push(frame);
+            return Err(e);
+        }
+        self.pool.push(frame.clone());
+        Ok(self.tracker.track(frame))
+    }
+
+    /// Prepares the frames from the next one on with new intrinsics of the same image
+    /// size ([`Preparer::set_intrinsics`]); tracking goes on across the change.
+    pub fn set_intrinsics(&mut self, camera: Camera) -> Result<()> {
+        self.preparer.set_intrinsics(camera)
+    }
+
+    /// The tracker, for its counters, state and reference frames.
+    pub fn tracker(&self) -> &Tracker<Arc<PreparedFrame>> {
+        &self.tracker
+    }
+
+    /// Prepared frames alive (previous, references and free ones): bounded by the
+    /// number of levels plus two, whatever the length of the stream.
+    pub fn frames_allocated(&self) -> usize {
+        self.pool.len()
+    }
+}
