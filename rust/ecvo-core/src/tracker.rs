@@ -152,6 +152,9 @@ pub struct Tracker<F> {
     /// The settings every `MOTION` call uses: `config.motion` with the depth-noise
     /// model in use (under [`DepthNoiseModel::Fitted`], the fitted one).
     motion: MotionConfig,
+    /// The same for corrections, refinements and recoveries: their depth spread is
+    /// not fitted, so not measured.
+    correcting: MotionConfig,
     /// The depth-noise model's fit ([`DepthNoiseModel::Fitted`]).
     noise: NoiseFit,
 }
@@ -177,6 +180,10 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             spread: SpreadWatch::default(),
             chain: vec![None; levels],
             motion: working_motion(&config.motion),
+            correcting: MotionConfig {
+                depth_spread: false,
+                ..working_motion(&config.motion)
+            },
             noise: NoiseFit::new(config.motion.depth_noise),
             config,
         })
@@ -187,9 +194,10 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         &self.config
     }
 
-    /// The settings of the tracker's `MOTION` calls: the configuration's, with the
-    /// depth-noise model in use ([`Self::depth_noise`]). \[A\] computed elsewhere
-    /// ([`frame_to_frame`]) must use these to be the tracker's own.
+    /// The settings of the tracker's \[A\]: the configuration's, with the depth-noise
+    /// model in use ([`Self::depth_noise`]) (its other `MOTION` calls differ only in
+    /// not measuring the depth spread). \[A\] computed elsewhere ([`frame_to_frame`])
+    /// must use these to be the tracker's own.
     pub fn motion_config(&self) -> &MotionConfig {
         &self.motion
     }
@@ -321,6 +329,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
                 && let Some(m) = self.noise.record(&f2f.depth_spread)
             {
                 self.motion.depth_noise = m;
+                self.correcting.depth_noise = m;
                 self.counters.noise_refits += 1;
             }
             // A velocity only from consecutive frames: after a lost frame, [A] spans
@@ -379,7 +388,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             }
             let r = self
                 .estimator
-                .motion(&frame, &reference.frame, &accumulated, &self.motion);
+                .motion(&frame, &reference.frame, &accumulated, &self.correcting);
             out.motion_estimations += 1;
             self.counters.motion_estimations += 1;
             if !r.is_ok() {
@@ -445,7 +454,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         }
         let r = self
             .estimator
-            .motion(frame, &reference.frame, &accumulated, &self.motion);
+            .motion(frame, &reference.frame, &accumulated, &self.correcting);
         out.motion_estimations += 1;
         self.counters.motion_estimations += 1;
         self.counters.refinements += 1;
@@ -492,7 +501,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             let init = se3::compose(&reference.pose.inverse(), predicted);
             let r = self
                 .estimator
-                .motion(frame, &reference.frame, &init, &self.motion);
+                .motion(frame, &reference.frame, &init, &self.correcting);
             out.motion_estimations += 1;
             self.counters.motion_estimations += 1;
             if r.is_ok() {
