@@ -285,10 +285,7 @@ fn noise_free_blank_walls_fit_a_flat_noise_model_and_track_below_a_millimetre() 
         let mut args = vec!["run", s, "--out", out.to_str().unwrap(), "--threads", "1"];
         args.extend_from_slice(flags);
         run_ok(&args);
-        let v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-                .unwrap();
-        v
+        summary(&out)
     };
     let fitted = run_with("fitted", &[]);
     let quadratic = run_with("quadratic", &["--depth-noise", "quadratic"]);
