@@ -115,8 +115,10 @@ impl Evaluation {
 ///
 /// `filter` and `tracker` come from the pipeline's per-stage histograms: the mean is
 /// exact, the median is the centre of its histogram bin (within about 2 %).
-/// `total` is their sum (sum of the medians, sum of the means): the work one frame
-/// needs, which the stages overlap when the pipeline has two threads or more.
+/// `total` is the per-frame sum of the two (each frame's preparation plus its
+/// tracking, from the pipeline's `work` histogram): the work one frame needs, which
+/// the stages overlap when the pipeline has two threads or more. Each has its median,
+/// mean and 95th percentile.
 /// `geometry` is the CLI's point gathering per cloud frame (the frame prepared again
 /// and its points copied, on the input thread; 0 when no frame was gathered).
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -137,16 +139,12 @@ impl StageStats {
         let mm = |s: &ecvo_pipeline::StageStats| MedianMean {
             median: s.median_ms,
             mean: s.mean_ms,
+            p95: s.p95_ms,
         };
-        let filter = mm(&run.stats.filter);
-        let tracker = mm(&run.stats.tracker);
         StageStats {
-            filter,
-            tracker,
-            total: MedianMean {
-                median: filter.median + tracker.median,
-                mean: filter.mean + tracker.mean,
-            },
+            filter: mm(&run.stats.filter),
+            tracker: mm(&run.stats.tracker),
+            total: mm(&run.stats.work),
             geometry: MedianMean::of(run.cloud_ms.iter().copied()),
         }
     }
@@ -545,13 +543,16 @@ fn human_summary(seq: &Path, t: &Tracked, s: &StageStats, out: &Path) -> String 
     };
     let _ = writeln!(
         r,
-        "stage time, ms per frame (median/mean): filter {:.2}/{:.2}, tracker {:.2}/{:.2}, sum {:.2}/{:.2}{ahead}",
+        "stage time, ms per frame (median/mean/p95): filter {:.2}/{:.2}/{:.2}, tracker {:.2}/{:.2}/{:.2}, per frame {:.2}/{:.2}/{:.2}{ahead}",
         s.filter.median,
         s.filter.mean,
+        s.filter.p95,
         s.tracker.median,
         s.tracker.mean,
+        s.tracker.p95,
         s.total.median,
-        s.total.mean
+        s.total.mean,
+        s.total.p95
     );
     let _ = writeln!(
         r,

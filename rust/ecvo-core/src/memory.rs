@@ -113,12 +113,20 @@ fn template_capacity(config: &Config, level: usize, stride: usize) -> usize {
 }
 
 /// One prepared frame (`PreparedFrame::for_config`): the samples of every pyramid
-/// level (32 bytes a pixel), the full-resolution normals (12 bytes a pixel) and each
-/// step's template points (16 bytes a point).
+/// level the schedule tracks (32 bytes a pixel), the full-resolution intensity and
+/// depth when level 0 is not tracked (8 bytes a pixel), the full-resolution normals
+/// (12 bytes a pixel) and each step's template points (16 bytes a point).
 pub fn prepared_frame_bytes(config: &Config) -> usize {
+    let tracked = crate::prepare::tracked_levels(config);
     let samples: usize = level_sizes(config)
-        .map(|(w, h)| w * h * size_of::<Sample>())
-        .sum();
+        .zip(&tracked)
+        .map(|((w, h), &t)| if t { w * h * size_of::<Sample>() } else { 0 })
+        .sum::<usize>()
+        + if tracked[0] {
+            0
+        } else {
+            8 * config.camera.pixels()
+        };
     let normals = config.camera.pixels() * size_of::<[f32; 3]>();
     let templates: usize = config
         .motion

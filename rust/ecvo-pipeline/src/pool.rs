@@ -29,6 +29,8 @@ pub(crate) struct FrameMeta {
     pub pushed_at: Instant,
     /// \[A\] for this frame, computed by the filter stage while the tracker was behind.
     pub ahead: Option<Ahead>,
+    /// The filter stage's time on this frame (\[A\] computed ahead left out).
+    pub filtered_in: Duration,
 }
 
 /// `frame_to_frame(this frame, the frame of sequence `against`, prior)`, computed
@@ -143,6 +145,7 @@ impl FramePool {
                         sequence: 0,
                         pushed_at: Instant::now(),
                         ahead: None,
+                        filtered_in: Duration::ZERO,
                     },
                 })
             })

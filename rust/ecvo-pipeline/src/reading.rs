@@ -135,6 +135,7 @@ impl Pipeline {
         PipelineStats {
             filter: lock(&s.timers.filter).summary(),
             tracker: lock(&s.timers.tracker).summary(),
+            work: lock(&s.timers.work).summary(),
             geometry: lock(&s.timers.geometry).summary(),
             latency: lock(&s.timers.latency).summary(),
             wall_ms_per_frame: wall,

@@ -86,6 +86,7 @@ impl Progress {
 pub(crate) struct Timers {
     pub(crate) filter: Mutex<Histogram>,
     pub(crate) tracker: Mutex<Histogram>,
+    pub(crate) work: Mutex<Histogram>,
     pub(crate) geometry: Mutex<Histogram>,
     pub(crate) latency: Mutex<Histogram>,
 }

@@ -94,6 +94,7 @@ pub(crate) fn filter_stage(
             sequence: raw.sequence,
             pushed_at: raw.pushed_at,
             ahead,
+            filtered_in,
         };
         // [A] computed ahead is the tracker's work: the filter's figure leaves it out and
         // the tracker stage books it with the frame, used or discarded.
@@ -251,6 +252,7 @@ pub(crate) fn tracker_stage(
             }
         }
         lock(&s.timers.tracker).record(tracked_in);
+        lock(&s.timers.work).record(meta.filtered_in + tracked_in);
         lock(&s.timers.latency).record(now.saturating_duration_since(meta.pushed_at));
         s.update_progress(|p| {
             p.tracked += 1;

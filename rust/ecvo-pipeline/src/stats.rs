@@ -134,6 +134,10 @@ pub struct PipelineStats {
     pub filter: StageStats,
     /// Tracker stage (motion estimation and error correction) time per frame.
     pub tracker: StageStats,
+    /// Filter plus tracker time of each tracked frame (its preparation and its
+    /// tracking, \[A\] computed ahead included): the work one frame costs on one
+    /// core, whose median and p95 the per-stage figures cannot give.
+    pub work: StageStats,
     /// Geometry stage time per reference frame added to the cloud.
     pub geometry: StageStats,
     /// Time from `push` to the frame's pose being published, per tracked frame.

@@ -674,3 +674,40 @@ fn nanosecond_timestamps_are_compared_as_integers_at_any_magnitude() {
     let st = p.stats();
     assert_eq!((st.pushed, st.timestamps_rejected), (3, 1), "{st:?}");
 }
+
+/// The per-frame work (filter plus tracker of the same frame) is counted once per
+/// tracked frame; its mean is the sum of the stages' means, and since every frame's
+/// work is at least its tracking and at least its preparation, so are its median and
+/// 95th percentile.
+#[test]
+fn the_work_of_a_frame_is_its_preparation_plus_its_tracking() {
+    let (config, frames) = stream(30);
+    let st = within_a_minute(move || {
+        let p = Pipeline::new(
+            config,
+            PipelineOptions {
+                threads: 1,
+                ..PipelineOptions::default()
+            },
+        )
+        .unwrap();
+        for f in &frames {
+            push(&p, f).unwrap();
+        }
+        p.finish().unwrap().stats
+    });
+    assert_eq!(st.tracked, 30);
+    assert_eq!(st.work.frames, 30);
+    let sum = st.filter.mean_ms + st.tracker.mean_ms;
+    assert!(
+        (st.work.mean_ms - sum).abs() <= 1e-9 * sum.max(1.0),
+        "{} against {sum}",
+        st.work.mean_ms
+    );
+    for stage in [st.filter, st.tracker] {
+        assert!(st.work.median_ms >= stage.median_ms, "{st:?}");
+        assert!(st.work.p95_ms >= stage.p95_ms, "{st:?}");
+        assert!(st.work.max_ms >= stage.max_ms, "{st:?}");
+    }
+    assert!(st.work.max_ms <= st.filter.max_ms + st.tracker.max_ms + 1e-9);
+}

@@ -255,7 +255,7 @@ pub(super) fn motion_from<K: Loops>(
 /// True when the current frame `fi` has enough texture for its photometric spread to
 /// be checked ([`MotionConfig::depth_only_texture_fraction`]).
 fn textured(fi: &PreparedFrame, cfg: &MotionConfig) -> bool {
-    let pixels = fi.levels.first().map_or(0, |l| l.samples.len());
+    let pixels = fi.levels.first().map_or(0, |l| l.camera().pixels());
     fi.textured_pixels as f64 >= cfg.depth_only_texture_fraction * pixels as f64
 }
 

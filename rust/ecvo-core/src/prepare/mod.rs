@@ -136,6 +136,10 @@ pub struct PreparedFrame {
     pub removed_by_normal: usize,
     /// Pixels the contour filter removed.
     pub removed_by_contour: usize,
+    /// The full-resolution intensity and filtered depth, kept only when the schedule
+    /// does not track level 0 (its samples are then not built): what
+    /// [`Self::for_each_point`] reads instead.
+    base: pyramid::Planes,
 }
 
 impl PreparedFrame {
@@ -143,13 +147,20 @@ impl PreparedFrame {
     /// that preparing into it never allocates (frame pools create their frames so).
     pub fn for_config(config: &Config) -> PreparedFrame {
         let cams = level_cameras(config);
+        let tracked = tracked_levels(config);
         let levels = cams
             .iter()
-            .map(|c| ImageLevel {
+            .zip(&tracked)
+            .map(|(c, &t)| ImageLevel {
                 camera: Some(*c),
-                samples: Vec::with_capacity(c.pixels()),
+                samples: Vec::with_capacity(if t { c.pixels() } else { 0 }),
             })
             .collect();
+        let base_pixels = if tracked[0] {
+            0
+        } else {
+            config.camera.pixels()
+        };
         let templates = config
             .motion
             .levels
@@ -163,6 +174,10 @@ impl PreparedFrame {
             levels,
             templates,
             normals: Vec::with_capacity(config.camera.pixels()),
+            base: pyramid::Planes {
+                intensity: Vec::with_capacity(base_pixels),
+                depth: Vec::with_capacity(base_pixels),
+            },
             ..PreparedFrame::default()
         }
     }
@@ -177,10 +192,22 @@ impl PreparedFrame {
         let (w, h) = (cam.width, cam.height);
         let (fx, fy, cx, cy) = (cam.fx as f32, cam.fy as f32, cam.cx as f32, cam.cy as f32);
         let stride = stride.max(1);
+        // Level 0's samples when it is tracked, else the planes kept in their stead:
+        // the same intensity and depth.
+        let kept = !level.samples.is_empty();
+        let at = |i: usize| {
+            if kept {
+                (level.samples[i][D], level.samples[i][I])
+            } else {
+                (self.base.depth[i], self.base.intensity[i])
+            }
+        };
+        if !kept && self.base.depth.len() != w * h {
+            return;
+        }
         for y in (0..h).step_by(stride) {
             for x in (0..w).step_by(stride) {
-                let s = &level.samples[y * w + x];
-                let z = s[D];
+                let (z, intensity) = at(y * w + x);
                 if z.is_finite() {
                     let p = [(x as f32 - cx) / fx * z, (y as f32 - cy) / fy * z, z];
                     let n = self
@@ -188,7 +215,7 @@ impl PreparedFrame {
                         .get(y * w + x)
                         .copied()
                         .unwrap_or([f32::NAN; 3]);
-                    f(p, n, (s[I] * 255.0).round().clamp(0.0, 255.0) as u8);
+                    f(p, n, (intensity * 255.0).round().clamp(0.0, 255.0) as u8);
                 }
             }
         }
@@ -203,6 +230,9 @@ pub struct Preparer {
     filter: FilterConfig,
     schedule: Vec<MotionLevel>,
     pyramid_depth: usize,
+    /// Per pyramid level: whether a step of the schedule tracks it (only those get
+    /// samples).
+    tracked: Vec<bool>,
     /// Depth in metres, missing as 0, padded by the bilateral radius on every side.
     padded_depth: Vec<f32>,
     /// Smoothed depth in metres, NaN where missing.
@@ -249,6 +279,7 @@ impl Preparer {
             filter: config.filter,
             schedule: config.motion.levels.clone(),
             pyramid_depth: config.pyramid_depth(),
+            tracked: tracked_levels(config),
             padded_depth: Vec::new(),
             smoothed: Vec::new(),
             spatial,
@@ -364,10 +395,25 @@ impl Preparer {
             }
             let level = &mut out.levels[l];
             level.camera = Some(level_cam);
-            let textured = pyramid::samples(&self.planes[l], level_cam.width, &mut level.samples);
-            if l == 0 {
-                out.textured_pixels = textured;
+            // A level no step tracks needs no samples (at 640x480 the default
+            // schedule's finest step is on level 1): only level 0's texture count.
+            if self.tracked[l] {
+                let textured =
+                    pyramid::samples(&self.planes[l], level_cam.width, &mut level.samples);
+                if l == 0 {
+                    out.textured_pixels = textured;
+                }
+            } else {
+                level.samples.clear();
+                if l == 0 {
+                    out.textured_pixels = pyramid::textured(&self.planes[0], level_cam.width);
+                }
             }
+        }
+        if !self.tracked[0] {
+            // The frame keeps level 0's planes for its points; the preparer takes the
+            // frame's old buffers (reserved by `for_config`) for the next frame.
+            std::mem::swap(&mut self.planes[0], &mut out.base);
         }
         out.templates
             .resize_with(self.schedule.len(), Template::default);
@@ -416,6 +462,16 @@ fn level_cameras(config: &Config) -> Vec<Camera> {
         cams.push(half);
     }
     cams
+}
+
+/// Per pyramid level of `config`, full resolution first: whether a step of its
+/// schedule runs on it.
+pub(crate) fn tracked_levels(config: &Config) -> Vec<bool> {
+    let mut tracked = vec![false; config.pyramid_depth() + 1];
+    for l in &config.motion.levels {
+        tracked[l.pyramid_level] = true;
+    }
+    tracked
 }
 
 /// The most template points a level of camera `c` sampled every `stride` pixels has.

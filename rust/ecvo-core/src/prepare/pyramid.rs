@@ -113,3 +113,28 @@ pub(crate) fn samples(p: &Planes, w: usize, out: &mut Vec<Sample>) -> usize {
     }
     count
 }
+
+/// The texture count [`samples`] returns, without writing the samples: the pixels of
+/// a level (`w` wide) with depth and an intensity gradient `|Ix| + |Iy|` of at least
+/// [`TEXTURE_GRADIENT`] (none on the border, whose gradient is 0).
+#[inline(never)]
+pub(crate) fn textured(p: &Planes, w: usize) -> usize {
+    let n = p.intensity.len();
+    let h = n / w.max(1);
+    if w < 3 || h < 3 {
+        return 0;
+    }
+    let (pi, pz) = (&p.intensity, &p.depth);
+    let mut count = 0;
+    for y in 1..h - 1 {
+        let r = y * w;
+        let (iu, ic, id) = (&pi[r - w..r], &pi[r..r + w], &pi[r + w..r + 2 * w]);
+        let zc = &pz[r..r + w];
+        for x in 1..w - 1 {
+            let gx = 0.5 * (ic[x + 1] - ic[x - 1]);
+            let gy = 0.5 * (id[x] - iu[x]);
+            count += (zc[x].is_finite() && gx.abs() + gy.abs() >= TEXTURE_GRADIENT) as usize;
+        }
+    }
+    count
+}

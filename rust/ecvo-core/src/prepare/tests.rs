@@ -428,3 +428,84 @@ fn selection_is_deterministic_with_reused_buffers() {
     }
     same(&out, &first, "reused");
 }
+
+/// The points `for_each_point` visits, as bits.
+fn cloud_bits(f: &PreparedFrame) -> Vec<([u32; 3], [u32; 3], u8)> {
+    let mut v = Vec::new();
+    f.for_each_point(3, |p, n, i| {
+        v.push((p.map(f32::to_bits), n.map(f32::to_bits), i))
+    });
+    v
+}
+
+/// A schedule that does not track level 0 (the default at 640x480) gets no samples
+/// there, and nothing else changes: the other levels, the templates, the counts and
+/// the cloud's points are those of a schedule that tracks it, bit for bit, in reused
+/// pooled frames and on every SIMD path.
+#[test]
+fn an_untracked_level_gets_no_samples_and_changes_nothing_else() {
+    let cam = SynthCamera::phone_320x180();
+    let seq = SynthSequence::phone_320x180(8, 3);
+    let c = Camera {
+        width: cam.width,
+        height: cam.height,
+        fx: cam.fx,
+        fy: cam.fy,
+        cx: cam.cx,
+        cy: cam.cy,
+        depth_scale: cam.depth_scale,
+    };
+    let all = Config::new(c, Preset::Pc, Mode::L2);
+    let mut coarse = all.clone();
+    coarse.motion.levels = crate::parse_schedule("3/1/20,2/1/15,1/1/10", &c).unwrap();
+    assert!(all.motion.levels.iter().any(|l| l.pyramid_level == 0));
+    let (mut pa, mut pc) = (Preparer::new(&all), Preparer::new(&coarse));
+    let (mut fa, mut fc) = (
+        PreparedFrame::for_config(&all),
+        PreparedFrame::for_config(&coarse),
+    );
+    for i in [0, 4, 5] {
+        let f = seq.frame(i);
+        let view = FrameView {
+            timestamp: f.timestamp,
+            intensity: &f.intensity,
+            depth: &f.depth,
+        };
+        simd::on_each_path(|path| {
+            pa.prepare_into(view, &mut fa).unwrap();
+            pc.prepare_into(view, &mut fc).unwrap();
+            let what = format!("frame {i} {path}");
+            assert!(fc.levels[0].samples.is_empty(), "{what}");
+            assert_eq!(
+                fc.levels[0].samples.capacity(),
+                0,
+                "{what}: nothing reserved"
+            );
+            assert!(!fa.levels[0].samples.is_empty(), "{what}");
+            assert_eq!(fc.textured_pixels, fa.textured_pixels, "{what}: textured");
+            assert!(fa.textured_pixels > 0, "{what}");
+            assert_eq!(fc.valid_depth, fa.valid_depth, "{what}");
+            assert!(bits3(&fc.normals) == bits3(&fa.normals), "{what}: normals");
+            for k in 1..fa.levels.len() {
+                let bits = |l: &ImageLevel| -> Vec<[u32; 8]> {
+                    l.samples.iter().map(|s| s.map(f32::to_bits)).collect()
+                };
+                assert!(
+                    bits(&fc.levels[k]) == bits(&fa.levels[k]),
+                    "{what}: level {k}"
+                );
+            }
+            for t in &fc.templates {
+                let same_step = fa
+                    .templates
+                    .iter()
+                    .find(|u| u.pyramid_level == t.pyramid_level)
+                    .unwrap();
+                assert!(point_bits(t) == point_bits(same_step), "{what}: template");
+            }
+            let cloud = cloud_bits(&fc);
+            assert!(!cloud.is_empty(), "{what}");
+            assert!(cloud == cloud_bits(&fa), "{what}: cloud points");
+        });
+    }
+}
