@@ -54,11 +54,7 @@ fi
 
 args=()
 if [[ ,$peers, == *,vors,* ]]; then
-    vors=$cache/vors-cam-target/release/vors-cam
-    # Rebuilds when the driver's sources changed (cargo decides; quick when they did not).
-    (cd "$root/scripts/peers/vors-cam" &&
-        cargo build --release --locked --quiet --target-dir "$cache/vors-cam-target" >&2)
-    args+=(--vors-cam "$vors")
+    args+=(--vors-cam "$(ensure_vors_cam "$root" "$cache")")
 fi
 
 exec "$venv/bin/python" "$root/scripts/peers/peers.py" --ecvo "$ecvo" --peers "$peers" \
