@@ -17,9 +17,11 @@
 # (cv2.setNumThreads(1)), Open3D with OMP_NUM_THREADS=1; both bound to CPU --peer-cpu
 # (default 0; `none` leaves the affinity alone), which is what keeps Open3D's oneTBB
 # pool to the main thread; vors the thread CPU time of Tracker::track (vors-cam).
-# Prints per round ecvo's and the peer's median / mean / p95 and the ratios peer / ecvo
-# of the means and of the medians, then per sequence the median and range over the
-# rounds of each ratio, and which kernel copies ecvo ran (summary.json's `simd`).
+# The JSON also has ecvo's whole-process CPU per frame (bash's `time`: user + system of
+# every thread, decoding included, an upper bound). Prints per round ecvo's and the
+# peer's median / mean / p95 and the ratios peer / ecvo of the means and of the
+# medians, then per sequence the median and range over the rounds of each ratio, and
+# which kernel copies ecvo ran (summary.json's `simd`).
 # Writes DIR/rounds.jsonl and DIR/bench.json (default DIR target/bench-vs-PEER).
 # Same set-up as run-peers.sh (venv, vors-cam build, ECVO, PEERS_VENV, PEERS_CACHE).
 set -euo pipefail
@@ -45,7 +47,7 @@ while [[ $# -gt 0 ]]; do
         --peer-cpu) peer_cpu=$2; shift 2 ;;
         --out) out=$2; shift 2 ;;
         --) shift; extra=("$@"); break ;;
-        -h|--help) sed -n '2,25p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,/^set /{/^set /d;s/^# \{0,1\}//;p}' "$0"; exit 0 ;;
         -*) echo "unknown option $1" >&2; exit 2 ;;
         *) seqs+=("$1"); shift ;;
     esac
@@ -84,8 +86,12 @@ for seq in "${seqs[@]}"; do
     for r in $(seq 1 "$rounds"); do
         dir=$out/$name/round$r
         mkdir -p "$dir"
-        "$ecvo" run "$seq" "${ecvo_args[@]}" --out "$dir/ecvo" "${extra[@]}" \
-            > "$dir/ecvo.log" 2>&1 || { echo "ecvo run failed: $dir/ecvo.log" >&2; exit 1; }
+        # bash's `time` gives the whole process's user and system CPU (every thread,
+        # PNG decoding and start-up included): an upper bound beside the stage times.
+        TIMEFORMAT='%U %S'
+        { time "$ecvo" run "$seq" "${ecvo_args[@]}" --out "$dir/ecvo" "${extra[@]}" \
+            > "$dir/ecvo.log" 2>&1; } 2> "$dir/ecvo.cpu" \
+            || { echo "ecvo run failed: $dir/ecvo.log" >&2; exit 1; }
         "$venv/bin/python" "$root/scripts/peers/peers.py" --ecvo "$ecvo" --peers "$peer" \
             --frame-steps "$step" "${peer_args[@]}" --out "$dir/$peer" "$seq" \
             > "$dir/$peer.log" 2>&1 || { echo "peers.py failed: $dir/$peer.log" >&2; exit 1; }

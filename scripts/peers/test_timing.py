@@ -133,6 +133,9 @@ class RoundAndReport(unittest.TestCase):
             # Round 1: ecvo 3 / 4 / 8 ms, vors 1 / 2 / 5: ratios of means 0.5, medians 1/3.
             d1 = self.write_round(root, 1, ((2.0, 3.0, 6.0), (1.0, 1.0, 2.0)),
                                   [1.0, 1.0, 1.0, 2.0, 5.0])
+            # bash's `time` output (user, system seconds) over ecvo's 10 frames.
+            with open(os.path.join(d1, "ecvo.cpu"), "w") as f:
+                f.write("0.100 0.020\n")
             # Round 2: ecvo 2 / 2 / 4 ms, vors 1 / 1.5 / 3: 0.75 and 0.5.
             d2 = self.write_round(root, 2, ((1.0, 1.0, 2.0), (1.0, 1.0, 2.0)),
                                   [1.0, 1.0, 1.0, 3.0])
@@ -142,6 +145,12 @@ class RoundAndReport(unittest.TestCase):
                 rec = json.loads(out)
                 lines.append(out)
                 self.assertIn(f"seq round {r}:", err)
+                if r == 1:
+                    self.assertAlmostEqual(rec["ecvo_process_cpu_ms_per_frame"], 12.0)
+                    self.assertAlmostEqual(rec["ratio"]["mean"], 0.5)
+                    self.assertAlmostEqual(rec["ratio"]["median"], 1 / 3)
+                else:
+                    self.assertNotIn("ecvo_process_cpu_ms_per_frame", rec)
             self.assertAlmostEqual(rec["ratio"]["mean"], 0.75)
             self.assertAlmostEqual(rec["ratio"]["median"], 0.5)
             self.assertEqual(rec["peer_clock"], "thread_cpu")

@@ -108,6 +108,13 @@ def round_record(d, name, r, peer):
     rec = {"sequence": name, "round": int(r), "peer": peer, "ecvo": e, "peer_ms": p,
            "peer_clock": row["clock"], "ratio": ratios(e, p),
            "ecvo_simd": summ.get("simd", "?"), "ecvo_frames": summ.get("frames")}
+    try:
+        with open(f"{d}/ecvo.cpu") as f:
+            user, system = (float(x) for x in f.read().split()[-2:])
+        # Whole process, every thread, decoding and start-up included: an upper bound.
+        rec["ecvo_process_cpu_ms_per_frame"] = (user + system) * 1e3 / max(e["frames"], 1)
+    except (OSError, ValueError):
+        pass
     for k in ("process_cpu_ms_per_frame", "thread_cpu_ms_per_frame", "wall_ms_per_frame",
               "process_over_thread", "threads"):
         if k in row:
