@@ -259,7 +259,7 @@ class Open3dOdometry:
 
 
 def threads_now():
-    """[(tid, name, cpu_s)] of this process's threads (/proc/self/task)."""
+    """This process's threads now (/proc/self/task): [{"tid", "name", "cpu_s"}]."""
     out = []
     tick = os.sysconf("SC_CLK_TCK")
     for t in sorted(os.listdir("/proc/self/task"), key=int):
