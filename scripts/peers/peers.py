@@ -25,18 +25,29 @@ groundtruth.txt), at several frame steps:
 
 Colour and depth are paired by nearest timestamp within 0.02 s (greedy, closest pairs
 first, each image used once), as TUM's associate.py does; `--frame-steps N` keeps every
-Nth associated pair. Each run writes a TUM trajectory, is scored with
-`ecvo eval GT EST --json`, and is timed per frame: the median of the per-frame cost of
+Nth associated pair (and `--max-frames N` the first N of those). Each run writes a TUM
+trajectory, is scored with `ecvo eval GT EST --json`, and is timed per frame: the cost of
 the odometry (OpenCV: making the OdometryFrame from the decoded images, including the
 conversion of depth to metres, prepareFrame and compute; Open3D: making the two
 RGBDImages' Image objects and RGBDImage, and compute_rgbd_odometry, which builds both
-frames' pyramids on every call; vors: Tracker::track), as CPU
-time on one thread (OpenCV is set to one thread; vors is single-threaded), which a
-loaded machine does not inflate; the wall-clock median is in the JSON too. Reading and
-decoding the PNGs is not counted for either.
+frames' pyramids on every call; vors: Tracker::track). Reading and decoding the PNGs is
+not counted for any.
+
+Every frame is timed on three clocks: the CPU time of the whole process
+(time.process_time(), every thread's), the CPU time of the calling thread
+(time.thread_time()) and the wall clock. `ms_per_frame` is the process CPU time for
+OpenCV and Open3D, so that work a library hands to threads of its own is counted (Open3D
+0.20 runs its kernels on a oneTBB pool that OMP_NUM_THREADS does not bound), and the
+thread CPU time for vors (vors-cam's CLOCK_THREAD_CPUTIME_ID; vors is single-threaded,
+which its thread count checks). OMP_NUM_THREADS=1 and cv2.setNumThreads(1) are set;
+`--pin-cpu N` also binds the process to CPU N before any library is loaded (as
+`taskset -c N`), which makes oneTBB start no workers. Each row of the JSON has all three
+clocks' median, mean and p95 (nearest rank, as ecvo's histograms), the threads seen
+(/proc/self/task, with each thread's name and CPU seconds at the end) and the CPU
+affinity.
 
 Usage: peers.py --ecvo BIN [--vors-cam BIN] [--peers a,b] [--frame-steps 1,2]
-                --out DIR SEQ...
+                [--max-frames N] [--pin-cpu N] --out DIR SEQ...
 Prints a Markdown table and writes DIR/peers.json.
 """
 
@@ -44,17 +55,34 @@ import argparse
 import bisect
 import json
 import os
-import statistics
 import subprocess
 import sys
 import time
 
-# One thread for every peer, as ecvo's ms_per_frame is measured (Open3D reads this when
-# it is imported).
+import timing
+
+
+def _pin_from_argv(argv):
+    """The CPU of `--pin-cpu N` / `--pin-cpu=N` in argv, or None (read before the
+    libraries are imported, so that every thread they start inherits the affinity)."""
+    for i, a in enumerate(argv):
+        if a == "--pin-cpu" and i + 1 < len(argv):
+            return int(argv[i + 1])
+        if a.startswith("--pin-cpu="):
+            return int(a.split("=", 1)[1])
+    return None
+
+
+PIN_CPU = _pin_from_argv(sys.argv[1:]) if __name__ == "__main__" else None
+if PIN_CPU is not None:
+    os.sched_setaffinity(0, {PIN_CPU})
+
+# One thread for every peer, as ecvo's ms_per_frame is measured (OpenMP and OpenBLAS
+# read this when they are loaded; Open3D's oneTBB pool does not).
 os.environ["OMP_NUM_THREADS"] = "1"
 
-import numpy as np
-import cv2
+import numpy as np  # noqa: E402 (after the affinity and OMP_NUM_THREADS)
+import cv2  # noqa: E402
 
 MAX_DT = 0.02
 
@@ -230,6 +258,25 @@ class Open3dOdometry:
         return bool(ok), np.asarray(t, dtype=np.float64)
 
 
+def threads_now():
+    """This process's threads now (/proc/self/task): [{"tid", "name", "cpu_s"}]."""
+    out = []
+    tick = os.sysconf("SC_CLK_TCK")
+    for t in sorted(os.listdir("/proc/self/task"), key=int):
+        try:
+            with open(f"/proc/self/task/{t}/comm") as f:
+                name = f.read().strip()
+            with open(f"/proc/self/task/{t}/stat") as f:
+                # Fields after the parenthesised name: utime and stime are the 12th
+                # and 13th.
+                st = f.read().rsplit(")", 1)[1].split()
+        except OSError:  # the thread ended meanwhile
+            continue
+        out.append({"tid": int(t), "name": name,
+                    "cpu_s": (int(st[11]) + int(st[12])) / tick})
+    return out
+
+
 def make_odometry(peer, cam):
     """The Python-driven peer `peer` (opencv-* or open3d-*)."""
     family, mode = peer.split("-", 1)
@@ -241,20 +288,25 @@ def make_odometry(peer, cam):
 def run_python_peer(peer, seq, cam, pairs, out_path):
     """Runs an OpenCV or Open3D peer naively frame to frame."""
     odo = make_odometry(peer, cam)
+    at_start = len(os.listdir("/proc/self/task"))
+    most = at_start
     pose = np.eye(4)
-    stamps, poses, ms, wall, failed = [], [], [], [], 0
+    stamps, poses, proc, thread, wall, failed = [], [], [], [], [], 0
     prev = None
     for (t, rgb_rel), (_, depth_rel) in pairs:
         gray = read_gray(os.path.join(seq, rgb_rel))
         depth = read_depth(os.path.join(seq, depth_rel))
-        start, cpu = time.perf_counter(), time.thread_time()
+        start, cpu, pcpu = time.perf_counter(), time.thread_time(), time.process_time()
         cur = odo.frame(gray, depth)
         if prev is not None:
             # As OpenCV's own odometry evaluation sample does: the current frame is the
             # source, the previous one the destination.
             ok, rt = odo.compute(cur, prev)
-        ms.append((time.thread_time() - cpu) * 1e3)
+        pcpu, cpu = time.process_time() - pcpu, time.thread_time() - cpu
         wall.append((time.perf_counter() - start) * 1e3)
+        proc.append(pcpu * 1e3)
+        thread.append(cpu * 1e3)
+        most = max(most, len(os.listdir("/proc/self/task")))
         if prev is not None:
             if ok and np.all(np.isfinite(rt)):
                 # Rt * p_cur = p_prev: Rt is the current camera's pose in the previous
@@ -267,7 +319,9 @@ def run_python_peer(peer, seq, cam, pairs, out_path):
         poses.append(pose.copy())
     write_tum(out_path, stamps, poses)
     # The first frame is only prepared; its cost is part of every later frame's.
-    return {"ms": ms[1:], "wall_ms": wall[1:], "failed": failed, "api": odo.api}
+    return {"clock": "process_cpu", "process_ms": proc[1:], "thread_ms": thread[1:],
+            "wall_ms": wall[1:], "failed": failed, "api": odo.api,
+            "threads": {"at_start": at_start, "max_seen": most, "at_end": threads_now()}}
 
 
 def run_vors(vors_cam, seq, pairs, out_path, work):
@@ -286,14 +340,18 @@ def run_vors(vors_cam, seq, pairs, out_path, work):
         f.write(r.stdout)
     timed = [line.split() for line in r.stderr.splitlines()
              if line.startswith("vors-cam-ms ")]
-    ms = [float(x[2]) for x in timed]
-    wall = [float(x[3]) for x in timed]
+    most = [int(line.split()[1]) for line in r.stderr.splitlines()
+            if line.startswith("vors-cam-threads ")]
     failed = sum(1 for line in r.stderr.splitlines()
                  if line and not line.startswith(("vors-cam", "Optical_flow",
                                                   "Changing keyframe")))
     keyframes = sum(1 for line in r.stderr.splitlines()
                     if line.startswith("Changing keyframe"))
-    return {"ms": ms, "wall_ms": wall, "failed": failed, "keyframes": keyframes}
+    return {"clock": "thread_cpu", "thread_ms": [float(x[2]) for x in timed],
+            "wall_ms": [float(x[3]) for x in timed],
+            "process_ms": [float(x[4]) for x in timed if len(x) > 4],
+            "failed": failed, "keyframes": keyframes,
+            "threads": {"max_seen": most[0] if most else None}}
 
 
 def evaluate(ecvo, gt, est):
@@ -310,6 +368,10 @@ def main():
     ap.add_argument("--vors-cam")
     ap.add_argument("--peers", default="opencv-rgbd,opencv-rgb,vors")
     ap.add_argument("--frame-steps", default="1")
+    ap.add_argument("--max-frames", type=int, default=0,
+                    help="keep the first N pairs of each frame step (0: all)")
+    ap.add_argument("--pin-cpu", type=int, metavar="N",
+                    help="bind the process to CPU N before loading any library")
     ap.add_argument("--out", required=True)
     a = ap.parse_args()
     steps = [int(s) for s in a.frame_steps.split(",")]
@@ -322,9 +384,9 @@ def main():
         ap.error("the vors peer needs --vors-cam")
     os.makedirs(a.out, exist_ok=True)
     rows = []
-    print("| sequence | frame step | peer | frames | ATE RMSE (m) | CPU ms/frame (median) "
-          "| failed |")
-    print("|---|---|---|---|---|---|---|")
+    print("| sequence | frame step | peer | frames | ATE RMSE (m) | clock | ms/frame median "
+          "/ mean / p95 | wall ms/frame median / mean / p95 | threads | failed |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for seq in a.seqs:
         seq = seq.rstrip("/")
         name = os.path.basename(seq)
@@ -332,6 +394,8 @@ def main():
         gt = os.path.join(seq, "groundtruth.txt")
         for step in steps:
             sel = pairs[::step]
+            if a.max_frames > 0:
+                sel = sel[:a.max_frames]
             work = os.path.join(a.out, name, f"step{step}")
             os.makedirs(work, exist_ok=True)
             for peer in peers:
@@ -341,22 +405,29 @@ def main():
                 else:
                     info = run_python_peer(peer, seq, cam, sel, est)
                 ate = evaluate(a.ecvo, gt, est)
-                ms = statistics.median(info["ms"]) if info["ms"] else float("nan")
                 row = {"sequence": name, "path": seq, "frame_step": step, "peer": peer,
-                       "frames": len(sel), "ate_rmse_m": ate, "ms_per_frame_median": ms,
-                       "wall_ms_per_frame_median": statistics.median(info["wall_ms"])
-                       if info["wall_ms"] else float("nan"),
-                       "failed": info["failed"], "trajectory": est}
+                       "frames": len(sel), "ate_rmse_m": ate}
+                row.update(timing.row_timing(info))
+                row.update({"failed": info["failed"], "threads": info["threads"],
+                            "trajectory": est})
                 for k in ("api", "keyframes"):
                     if k in info:
                         row[k] = info[k]
                 rows.append(row)
-                print(f"| {name} | {step} | {peer} | {len(sel)} | {ate:.4f} | {ms:.2f} | "
+                most = info["threads"].get("max_seen")
+                print(f"| {name} | {step} | {peer} | {len(sel)} | {ate:.4f} | "
+                      f"{row['clock']} | {timing.fmt3(row['ms_per_frame'])} | "
+                      f"{timing.fmt3(row['wall_ms_per_frame'])} | {most} | "
                       f"{info['failed']} |", flush=True)
     meta = {"opencv": cv2.__version__, "numpy": np.__version__,
             "open3d": sys.modules["open3d"].__version__ if "open3d" in sys.modules
             else None,
-            "association_max_dt_s": MAX_DT, "rows": rows}
+            "association_max_dt_s": MAX_DT, "max_frames": a.max_frames,
+            "cpu_affinity": sorted(os.sched_getaffinity(0)), "pin_cpu": a.pin_cpu,
+            "env": {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                                                   "TCM_ENABLE")},
+            "cv2_threads": cv2.getNumThreads(), "load_average": os.getloadavg(),
+            "rows": rows}
     with open(os.path.join(a.out, "peers.json"), "w") as f:
         json.dump(meta, f, indent=2)
     print(f"\nwrote {os.path.join(a.out, 'peers.json')}", file=sys.stderr)

@@ -4,11 +4,14 @@
 # opencv-contrib-python, and the visual-odometry-rs (vors) tracker from crates.io.
 #
 #   scripts/peers/run-peers.sh SEQ... [--frame-steps 1,2,3,4] [--out DIR]
-#                              [--peers opencv-rgbd,opencv-rgb,vors]
+#                              [--peers opencv-rgbd,opencv-rgb,vors] [--pin-cpu N]
+#                              [--max-frames N]
 #
-# Prints a Markdown table (sequence, frame step, peer, frames, ATE RMSE, median CPU
-# ms/frame, failed alignments) and writes DIR/peers.json (default DIR:
-# target/peers). Peers: opencv-rgbd, opencv-rgb, opencv-depth, open3d-hybrid,
+# Prints a Markdown table (sequence, frame step, peer, frames, ATE RMSE, the clock and
+# the median / mean / p95 ms/frame on it and on the wall clock, threads, failed
+# alignments) and writes DIR/peers.json (default DIR: target/peers). --pin-cpu N binds
+# the Python peers to CPU N (an honest one-thread time for Open3D; see
+# docs/speed-peers.md); --max-frames N keeps the first N frames. Peers: opencv-rgbd, opencv-rgb, opencv-depth, open3d-hybrid,
 # open3d-color, vors.
 #
 # First use sets up, all outside the repository's sources:
@@ -29,12 +32,14 @@ out=$root/target/peers
 steps=1
 peers=opencv-rgbd,opencv-rgb,vors
 seqs=()
+pass=()
 while [[ $# -gt 0 ]]; do
     case $1 in
         --frame-steps) steps=$2; shift 2 ;;
         --out) out=$2; shift 2 ;;
         --peers) peers=$2; shift 2 ;;
-        -h|--help) sed -n '2,21p' "$0"; exit 0 ;;
+        --pin-cpu|--max-frames) pass+=("$1" "$2"); shift 2 ;;
+        -h|--help) sed -n '2,/^set /{/^set /d;s/^# \{0,1\}//;p}' "$0"; exit 0 ;;
         -*) echo "unknown option $1" >&2; exit 2 ;;
         *) seqs+=("$1"); shift ;;
     esac
@@ -54,12 +59,8 @@ fi
 
 args=()
 if [[ ,$peers, == *,vors,* ]]; then
-    vors=$cache/vors-cam-target/release/vors-cam
-    # Rebuilds when the driver's sources changed (cargo decides; quick when they did not).
-    (cd "$root/scripts/peers/vors-cam" &&
-        cargo build --release --locked --quiet --target-dir "$cache/vors-cam-target" >&2)
-    args+=(--vors-cam "$vors")
+    args+=(--vors-cam "$(ensure_vors_cam "$root" "$cache")")
 fi
 
 exec "$venv/bin/python" "$root/scripts/peers/peers.py" --ecvo "$ecvo" --peers "$peers" \
-    --frame-steps "$steps" --out "$out" "${args[@]}" "${seqs[@]}"
+    --frame-steps "$steps" --out "$out" "${args[@]}" "${pass[@]}" "${seqs[@]}"

@@ -1,4 +1,4 @@
-# Sourced by run-peers.sh and bench-vs-opencv.sh: the set-up both need.
+# Sourced by run-peers.sh and bench-vs-peer.sh: the set-up both need.
 
 # ensure_peers_venv VENV: a Python venv with opencv-contrib-python and numpy.
 ensure_peers_venv() {
@@ -33,4 +33,13 @@ ensure_open3d() {
             return 1
         fi
     fi
+}
+
+# ensure_vors_cam ROOT CACHE: builds scripts/peers/vors-cam (a driver of the
+# visual-odometry-rs crate) into CACHE/vors-cam-target and prints the binary's path.
+# Cargo rebuilds only when the driver's sources changed.
+ensure_vors_cam() {
+    (cd "$1/scripts/peers/vors-cam" &&
+        cargo build --release --locked --quiet --target-dir "$2/vors-cam-target" >&2)
+    echo "$2/vors-cam-target/release/vors-cam"
 }

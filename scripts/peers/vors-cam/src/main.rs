@@ -6,10 +6,13 @@
 //! per line (paths relative to the file's folder, or absolute). Prints the TUM
 //! trajectory (`stamp tx ty tz qx qy qz qw`, the first frame at the identity, stamps of
 //! the depth images as vors_track does) to stdout, and to stderr one line
-//! `vors-cam-ms FRAME CPU_MS WALL_MS` per tracked frame: the CPU time (of this
-//! single-threaded process) and the wall time of `Tracker::track` (building the pyramids,
-//! the optimisation and, when the keyframe changes, its precomputation); reading and
-//! decoding the PNGs is not counted.
+//! `vors-cam-ms FRAME THREAD_CPU_MS WALL_MS PROCESS_CPU_MS` per tracked frame: the CPU
+//! time of the calling thread (`CLOCK_THREAD_CPUTIME_ID`), the wall time and the CPU time
+//! of the whole process (`CLOCK_PROCESS_CPUTIME_ID`) of `Tracker::track` (building the
+//! pyramids, the optimisation and, when the keyframe changes, its precomputation);
+//! reading and decoding the PNGs is not counted. vors is single-threaded: the last line,
+//! `vors-cam-threads MAX`, is the most threads `/proc/self/task` listed after any frame,
+//! and the thread and process CPU times agree when it is 1.
 
 use std::error::Error;
 use std::path::Path;
@@ -23,15 +26,31 @@ use visual_odometry_rs::misc::{helper, interop};
 
 type Res<T> = Result<T, Box<dyn Error>>;
 
-/// CPU time of this process, milliseconds.
-fn cpu_ms() -> f64 {
+/// CPU time of `clock` (a thread or process CPU clock), milliseconds.
+fn cpu_ms(clock: libc::clockid_t) -> f64 {
     let mut ts = libc::timespec {
         tv_sec: 0,
         tv_nsec: 0,
     };
     // SAFETY: `ts` is a valid, writable timespec.
-    unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+    let rc = unsafe { libc::clock_gettime(clock, &mut ts) };
+    assert_eq!(rc, 0, "clock_gettime({clock}) failed");
     ts.tv_sec as f64 * 1e3 + ts.tv_nsec as f64 * 1e-6
+}
+
+/// CPU time of the calling thread, milliseconds.
+fn thread_cpu_ms() -> f64 {
+    cpu_ms(libc::CLOCK_THREAD_CPUTIME_ID)
+}
+
+/// CPU time of every thread of this process, milliseconds.
+fn process_cpu_ms() -> f64 {
+    cpu_ms(libc::CLOCK_PROCESS_CPUTIME_ID)
+}
+
+/// Threads of this process now (entries of /proc/self/task; 0 where it is missing).
+fn thread_count() -> usize {
+    std::fs::read_dir("/proc/self/task").map_or(0, |d| d.count())
 }
 
 /// Value of a numeric key in a flat JSON object (camera.json has no nesting).
@@ -41,7 +60,7 @@ fn json_number(text: &str, key: &str) -> Res<f64> {
     let rest = text[at + pat.len()..].trim_start();
     let rest = rest.strip_prefix(':').ok_or("camera.json: ':' expected")?;
     let end = rest
-        .find(|c: char| c == ',' || c == '}')
+        .find([',', '}'])
         .ok_or("camera.json: unterminated value")?;
     Ok(rest[..end].trim().parse()?)
 }
@@ -87,12 +106,15 @@ fn main() -> Res<()> {
     let mut tracker = config.init(assoc[0].depth_timestamp, &d0, assoc[0].color_timestamp, i0);
     eprintln!("vors-cam-init-ms {:.3}", t.elapsed().as_secs_f64() * 1e3);
     println!("{:.6} 0 0 0 0 0 0 1", assoc[0].depth_timestamp);
+    let mut threads = thread_count();
     for (k, a) in assoc.iter().enumerate().skip(1) {
         let (d, i) = read_images(&dir.join(&a.depth_file_path), &dir.join(&a.color_file_path))?;
-        let (t, c) = (Instant::now(), cpu_ms());
+        let (t, c, p) = (Instant::now(), thread_cpu_ms(), process_cpu_ms());
         tracker.track(a.depth_timestamp, &d, a.color_timestamp, i);
-        let (cpu, wall) = (cpu_ms() - c, t.elapsed().as_secs_f64() * 1e3);
-        eprintln!("vors-cam-ms {k} {cpu:.3} {wall:.3}");
+        let (cpu, proc_cpu) = (thread_cpu_ms() - c, process_cpu_ms() - p);
+        let wall = t.elapsed().as_secs_f64() * 1e3;
+        threads = threads.max(thread_count());
+        eprintln!("vors-cam-ms {k} {cpu:.3} {wall:.3} {proc_cpu:.3}");
         let (stamp, pose) = tracker.current_frame();
         let tr = pose.translation.vector;
         let q = pose.rotation.into_inner().coords;
@@ -101,5 +123,6 @@ fn main() -> Res<()> {
             tr.x, tr.y, tr.z, q.x, q.y, q.z, q.w
         );
     }
+    eprintln!("vors-cam-threads {threads}");
     Ok(())
 }
