@@ -7,11 +7,12 @@
 #       SEQ... [-- ECVO RUN ARGS]
 #
 # For every sequence and round, in turn: `ecvo run SEQ --threads 1`, then the peer on
-# the same frames through peers.py. Per frame, ecvo counts its filter and tracker
-# stages (summary.json's pipeline.stages: preparation and every MOTION call, each
-# timed on its stage's thread by the wall clock; reading the PNGs is not counted). Its
-# mean is the exact sum of the two stages' means; summary.json has no per-frame totals,
-# so its median and p95 are the sums of the stages' medians and p95s. The peer counts
+# the same frames through peers.py. Per frame, ecvo counts its preparation and its
+# tracking (every MOTION call) as CPU time of its one compute thread (summary.json's
+# pipeline.stages.work_cpu, per frame, so its median and p95 are exact; the wall-clock
+# figure of the same work is beside it; reading the PNGs is not counted). A
+# summary.json from before those figures falls back to the sums of the filter and
+# tracker stages' wall-clock medians, means and p95s. The peer counts
 # its odometry only (decoding not counted): opencv-* and open3d-* the process CPU time
 # of making the frames and computing the motion, OpenCV on one thread
 # (cv2.setNumThreads(1)), Open3D with OMP_NUM_THREADS=1; both bound to CPU --peer-cpu

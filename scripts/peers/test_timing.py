@@ -98,6 +98,23 @@ class EcvoAndRatios(unittest.TestCase):
         self.assertTrue(e["exact"]["mean"])
         self.assertFalse(e["exact"]["median"])
 
+    def test_per_frame_cpu_figures_win_when_present(self):
+        s = ecvo_summary_json((2.0, 3.0, 6.0), (1.0, 1.5, 2.0))
+        st = s["pipeline"]["stages"]
+        st["work"] = {"frames": 10, "median_ms": 3.1, "mean_ms": 4.5, "p95_ms": 7.0,
+                      "max_ms": 9.0}
+        st["work_cpu"] = {"frames": 10, "median_ms": 2.9, "mean_ms": 4.2, "p95_ms": 6.5,
+                          "max_ms": 8.0}
+        e = timing.ecvo_summary(s)
+        self.assertEqual((e["median"], e["mean"], e["p95"]), (2.9, 4.2, 6.5))
+        self.assertEqual(e["clock"], "thread_cpu")
+        self.assertEqual(e["wall"]["p95"], 7.0)
+        self.assertTrue(all(e["exact"].values()))
+        # A run on a platform without a thread CPU clock reports zeros: fall back.
+        st["work_cpu"]["mean_ms"] = 0.0
+        e = timing.ecvo_summary(s)
+        self.assertEqual((e["median"], e["clock"]), (3.0, "wall"))
+
     def test_ratios_are_peer_over_ecvo(self):
         q = timing.ratios({"mean": 4.0, "median": 2.0}, {"mean": 1.0, "median": 3.0})
         self.assertEqual(q, {"mean": 0.25, "median": 1.5})

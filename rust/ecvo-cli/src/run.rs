@@ -129,6 +129,10 @@ pub struct StageStats {
     pub tracker: MedianMean,
     /// Filter plus tracker.
     pub total: MedianMean,
+    /// The same per-frame work as CPU time of the compute thread (the pipeline's
+    /// `work_cpu`): with `--threads 1` a frame's whole cost on one core, which time
+    /// spent descheduled on a loaded machine does not inflate.
+    pub cpu: MedianMean,
     /// Gathering the points of a cloud frame, per cloud frame.
     pub geometry: MedianMean,
 }
@@ -145,6 +149,7 @@ impl StageStats {
             filter: mm(&run.stats.filter),
             tracker: mm(&run.stats.tracker),
             total: mm(&run.stats.work),
+            cpu: mm(&run.stats.work_cpu),
             geometry: MedianMean::of(run.cloud_ms.iter().copied()),
         }
     }
@@ -469,6 +474,8 @@ fn pipeline_json(st: &ecvo_pipeline::PipelineStats) -> serde_json::Value {
         "stages": {
             "filter": stage(&st.filter),
             "tracker": stage(&st.tracker),
+            "work": stage(&st.work),
+            "work_cpu": stage(&st.work_cpu),
             "latency": stage(&st.latency),
         },
         "queues": {
@@ -543,7 +550,7 @@ fn human_summary(seq: &Path, t: &Tracked, s: &StageStats, out: &Path) -> String 
     };
     let _ = writeln!(
         r,
-        "stage time, ms per frame (median/mean/p95): filter {:.2}/{:.2}/{:.2}, tracker {:.2}/{:.2}/{:.2}, per frame {:.2}/{:.2}/{:.2}{ahead}",
+        "stage time, ms per frame (median/mean/p95): filter {:.2}/{:.2}/{:.2}, tracker {:.2}/{:.2}/{:.2}, per frame {:.2}/{:.2}/{:.2} (CPU {:.2}/{:.2}/{:.2}){ahead}",
         s.filter.median,
         s.filter.mean,
         s.filter.p95,
@@ -552,7 +559,10 @@ fn human_summary(seq: &Path, t: &Tracked, s: &StageStats, out: &Path) -> String 
         s.tracker.p95,
         s.total.median,
         s.total.mean,
-        s.total.p95
+        s.total.p95,
+        s.cpu.median,
+        s.cpu.mean,
+        s.cpu.p95
     );
     let _ = writeln!(
         r,

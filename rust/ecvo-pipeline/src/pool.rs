@@ -31,6 +31,8 @@ pub(crate) struct FrameMeta {
     pub ahead: Option<Ahead>,
     /// The filter stage's time on this frame (\[A\] computed ahead left out).
     pub filtered_in: Duration,
+    /// The same as CPU time of the compute thread.
+    pub filtered_cpu: Duration,
 }
 
 /// `frame_to_frame(this frame, the frame of sequence `against`, prior)`, computed
@@ -48,6 +50,8 @@ pub(crate) struct Ahead {
     /// How long computing it took on the filter stage's thread: booked to the tracker
     /// stage's time, not the filter's (used or discarded, it is the tracker's work).
     pub took: std::time::Duration,
+    /// The same as CPU time of the thread that computed it.
+    pub took_cpu: std::time::Duration,
 }
 
 /// One pooled frame.
@@ -146,6 +150,7 @@ impl FramePool {
                         pushed_at: Instant::now(),
                         ahead: None,
                         filtered_in: Duration::ZERO,
+                        filtered_cpu: Duration::ZERO,
                     },
                 })
             })

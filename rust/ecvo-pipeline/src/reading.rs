@@ -136,6 +136,7 @@ impl Pipeline {
             filter: lock(&s.timers.filter).summary(),
             tracker: lock(&s.timers.tracker).summary(),
             work: lock(&s.timers.work).summary(),
+            work_cpu: lock(&s.timers.work_cpu).summary(),
             geometry: lock(&s.timers.geometry).summary(),
             latency: lock(&s.timers.latency).summary(),
             wall_ms_per_frame: wall,

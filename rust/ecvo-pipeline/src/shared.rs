@@ -87,6 +87,7 @@ pub(crate) struct Timers {
     pub(crate) filter: Mutex<Histogram>,
     pub(crate) tracker: Mutex<Histogram>,
     pub(crate) work: Mutex<Histogram>,
+    pub(crate) work_cpu: Mutex<Histogram>,
     pub(crate) geometry: Mutex<Histogram>,
     pub(crate) latency: Mutex<Histogram>,
 }

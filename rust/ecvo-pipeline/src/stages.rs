@@ -1,6 +1,7 @@
 //! The three stage threads: filter, tracker and geometry (section 4.1, Figure 4).
 
 use super::*;
+use crate::stats::thread_cpu;
 
 /// The filter stage: prepares each frame. While the tracker is behind (its queue is
 /// not empty), it also computes the frame's \[A\] against the frame it prepared just
@@ -51,8 +52,8 @@ pub(crate) fn filter_stage(
         };
         let prepared = &mut slot_mut.frame;
         // Timed inside the pool: a stage's time is its work, not its wait for a thread.
-        let (result, ahead, filtered_in) = compute.install(|| {
-            let t0 = Instant::now();
+        let (result, ahead, filtered_in, filtered_cpu) = compute.install(|| {
+            let (t0, c0) = (Instant::now(), thread_cpu());
             // New intrinsics (`Pipeline::set_intrinsics`), checked when they were set.
             let r = if *preparer.camera() == raw.camera {
                 Ok(())
@@ -69,7 +70,7 @@ pub(crate) fn filter_stage(
                     let known =
                         chain.prior(config, prev, prepared.timestamp, behind, offline, published);
                     known.map(|prior| {
-                        let t1 = Instant::now();
+                        let (t1, c1) = (Instant::now(), thread_cpu());
                         motion.depth_noise = *lock(&s.depth_noise);
                         let result =
                             frame_to_frame(&mut estimator, prepared, prev, prior.as_ref(), &motion);
@@ -79,6 +80,7 @@ pub(crate) fn filter_stage(
                             depth_noise: motion.depth_noise,
                             result,
                             took: t1.elapsed(),
+                            took_cpu: thread_cpu().saturating_sub(c1),
                         }
                     })
                 }
@@ -87,14 +89,17 @@ pub(crate) fn filter_stage(
             if r.is_ok() {
                 chain.prepared(raw.sequence, prepared.timestamp, ahead.as_ref());
             }
-            (r, ahead, t0.elapsed())
+            (r, ahead, t0.elapsed(), thread_cpu().saturating_sub(c0))
         });
         let filtered_in = filtered_in.saturating_sub(ahead.map_or(Duration::ZERO, |a| a.took));
+        let filtered_cpu =
+            filtered_cpu.saturating_sub(ahead.map_or(Duration::ZERO, |a| a.took_cpu));
         slot_mut.meta = FrameMeta {
             sequence: raw.sequence,
             pushed_at: raw.pushed_at,
             ahead,
             filtered_in,
+            filtered_cpu,
         };
         // [A] computed ahead is the tracker's work: the filter's figure leaves it out and
         // the tracker stage books it with the frame, used or discarded.
@@ -144,8 +149,8 @@ pub(crate) fn tracker_stage(
         s.hook(Stage::Tracker, meta.sequence);
         let for_geometry = s.geometry.is_some().then(|| frame.clone());
         let mut used_ahead = false;
-        let (out, tracked_in) = compute.install(|| {
-            let t0 = Instant::now();
+        let (out, tracked_in, tracked_cpu) = compute.install(|| {
+            let (t0, c0) = (Instant::now(), thread_cpu());
             let out = tracker.track_with(frame, |prev, prior, noise| {
                 let a = meta.ahead.filter(|a| {
                     a.against == prev.sequence()
@@ -155,10 +160,11 @@ pub(crate) fn tracker_stage(
                 used_ahead = true;
                 Some(a.result)
             });
-            (out, t0.elapsed())
+            (out, t0.elapsed(), thread_cpu().saturating_sub(c0))
         });
         // The [A] the filter stage computed ahead for this frame is tracker work.
         let tracked_in = tracked_in + meta.ahead.map_or(Duration::ZERO, |a| a.took);
+        let tracked_cpu = tracked_cpu + meta.ahead.map_or(Duration::ZERO, |a| a.took_cpu);
         if used_ahead {
             s.update_progress(|p| p.ahead_used += 1);
         }
@@ -253,6 +259,7 @@ pub(crate) fn tracker_stage(
         }
         lock(&s.timers.tracker).record(tracked_in);
         lock(&s.timers.work).record(meta.filtered_in + tracked_in);
+        lock(&s.timers.work_cpu).record(meta.filtered_cpu + tracked_cpu);
         lock(&s.timers.latency).record(now.saturating_duration_since(meta.pushed_at));
         s.update_progress(|p| {
             p.tracked += 1;

@@ -84,6 +84,25 @@ impl Histogram {
     }
 }
 
+/// CPU time the calling thread has used so far (`CLOCK_THREAD_CPUTIME_ID`); zero
+/// where the platform has no such clock. Differences of it time a stage's work on its
+/// compute thread without the time the thread spent descheduled, as the peers are
+/// timed (issue 30).
+pub(crate) fn thread_cpu() -> std::time::Duration {
+    #[cfg(unix)]
+    {
+        let mut ts = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: `ts` is a valid, writable timespec; the call only writes it.
+        if unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) } == 0 {
+            return std::time::Duration::new(ts.tv_sec as u64, ts.tv_nsec as u32);
+        }
+    }
+    std::time::Duration::ZERO
+}
+
 /// Time one stage spent per frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StageStats {
@@ -138,6 +157,11 @@ pub struct PipelineStats {
     /// tracking, \[A\] computed ahead included): the work one frame costs on one
     /// core, whose median and p95 the per-stage figures cannot give.
     pub work: StageStats,
+    /// The same work as CPU time of the compute thread that ran it (0 where the
+    /// platform has no thread CPU clock): with one compute thread it is the frame's
+    /// whole cost on one core, unaffected by time spent descheduled on a loaded
+    /// machine; with more, what rayon ran on other threads is not in it.
+    pub work_cpu: StageStats,
     /// Geometry stage time per reference frame added to the cloud.
     pub geometry: StageStats,
     /// Time from `push` to the frame's pose being published, per tracked frame.

@@ -675,7 +675,7 @@ fn nanosecond_timestamps_are_compared_as_integers_at_any_magnitude() {
     assert_eq!((st.pushed, st.timestamps_rejected), (3, 1), "{st:?}");
 }
 
-/// The per-frame work (filter plus tracker of the same frame) is counted once per
+/// The per-frame work (filter plus tracker of the same frame, wall and CPU time) is counted once per
 /// tracked frame; its mean is the sum of the stages' means, and since every frame's
 /// work is at least its tracking and at least its preparation, so are its median and
 /// 95th percentile.
@@ -710,4 +710,14 @@ fn the_work_of_a_frame_is_its_preparation_plus_its_tracking() {
         assert!(st.work.max_ms >= stage.max_ms, "{st:?}");
     }
     assert!(st.work.max_ms <= st.filter.max_ms + st.tracker.max_ms + 1e-9);
+    // On one compute thread the CPU time is the same work without the time spent
+    // descheduled: never more than the wall time (to the clocks' resolution).
+    assert_eq!(st.work_cpu.frames, 30);
+    if cfg!(unix) {
+        assert!(st.work_cpu.mean_ms > 0.0, "{st:?}");
+    }
+    assert!(
+        st.work_cpu.mean_ms <= st.work.mean_ms * 1.001 + 0.01,
+        "{st:?}"
+    );
 }
