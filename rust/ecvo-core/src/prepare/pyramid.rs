@@ -1,6 +1,7 @@
 //! The image pyramid: compact planes per level, 2x2 downsampling, and the
 //! interleaved samples with their gradients.
 
+use super::simd::multiversion;
 use super::{D, Sample, TEXTURE_GRADIENT};
 
 /// One level as two compact planes, row-major.
@@ -117,7 +118,6 @@ pub(crate) fn samples(p: &Planes, w: usize, out: &mut Vec<Sample>) -> usize {
 /// The texture count [`samples`] returns, without writing the samples: the pixels of
 /// a level (`w` wide) with depth and an intensity gradient `|Ix| + |Iy|` of at least
 /// [`TEXTURE_GRADIENT`] (none on the border, whose gradient is 0).
-#[inline(never)]
 pub(crate) fn textured(p: &Planes, w: usize) -> usize {
     let n = p.intensity.len();
     let h = n / w.max(1);
@@ -125,16 +125,36 @@ pub(crate) fn textured(p: &Planes, w: usize) -> usize {
         return 0;
     }
     let (pi, pz) = (&p.intensity, &p.depth);
-    let mut count = 0;
-    for y in 1..h - 1 {
-        let r = y * w;
-        let (iu, ic, id) = (&pi[r - w..r], &pi[r..r + w], &pi[r + w..r + 2 * w]);
-        let zc = &pz[r..r + w];
-        for x in 1..w - 1 {
-            let gx = 0.5 * (ic[x + 1] - ic[x - 1]);
-            let gy = 0.5 * (id[x] - iu[x]);
-            count += (zc[x].is_finite() && gx.abs() + gy.abs() >= TEXTURE_GRADIENT) as usize;
-        }
+    (1..h - 1)
+        .map(|y| {
+            let r = y * w;
+            textured_row(
+                &pi[r - w..r],
+                &pi[r..r + w],
+                &pi[r + w..r + 2 * w],
+                &pz[r..r + w],
+            ) as usize
+        })
+        .sum()
+}
+
+multiversion! {
+    /// [`textured`]'s count over the interior of one row `ic` (`iu` above, `id` below,
+    /// `zc` its depth).
+    fn textured_row(iu: &[f32], ic: &[f32], id: &[f32], zc: &[f32]) -> u32 = textured_row_kernel;
+}
+
+#[inline(always)]
+fn textured_row_kernel(iu: &[f32], ic: &[f32], id: &[f32], zc: &[f32]) -> u32 {
+    let w = ic.len();
+    let (iu, id, zc) = (&iu[..w], &id[..w], &zc[..w]);
+    let mut count = 0u32;
+    for x in 1..w - 1 {
+        let gx = 0.5 * (ic[x + 1] - ic[x - 1]);
+        let gy = 0.5 * (id[x] - iu[x]);
+        // Branch-free (`&`, not `&&`), so that it vectorises.
+        let has_depth = zc[x].is_finite();
+        count += (has_depth & (gx.abs() + gy.abs() >= TEXTURE_GRADIENT)) as u32;
     }
     count
 }
