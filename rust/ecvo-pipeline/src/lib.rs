@@ -205,7 +205,9 @@ impl Pipeline {
             config.memory_budget,
         )?;
         let tracker: Tracker<PooledFrame> = Tracker::new(config.clone())?;
-        let preparer = Preparer::new(&config);
+        let mut preparer = Preparer::new(&config);
+        // Only the geometry stage reads the normals.
+        preparer.set_normals(options.geometry.is_some());
         let levels = config.reference_levels.len();
         let q = options.queue_capacity;
         let pool_capacity = frame_pool_capacity(&config, &options);

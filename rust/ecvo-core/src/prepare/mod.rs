@@ -124,7 +124,8 @@ pub struct PreparedFrame {
     /// Template points, one entry per step of the motion schedule.
     pub templates: Vec<Template>,
     /// Unit normals of the full-resolution pixels (NaN where unknown), oriented
-    /// towards the camera: the average of the axis and diagonal normals.
+    /// towards the camera: the average of the axis and diagonal normals. Empty when
+    /// the preparer keeps none ([`Preparer::set_normals`]).
     pub normals: Vec<[f32; 3]>,
     /// Number of full-resolution pixels with depth after filtering.
     pub valid_depth: usize,
@@ -253,6 +254,8 @@ pub struct Preparer {
     planes: Vec<pyramid::Planes>,
     /// Scratch of the template point selection.
     selector: select::Selector,
+    /// Whether frames get their normals ([`Preparer::set_normals`]).
+    keep_normals: bool,
 }
 
 impl Preparer {
@@ -290,6 +293,7 @@ impl Preparer {
             mask_rows: Vec::new(),
             planes: Vec::new(),
             selector: select::Selector::default(),
+            keep_normals: true,
         }
     }
 
@@ -309,6 +313,16 @@ impl Preparer {
         (self.ray_x, self.ray_y) = rays(&camera);
         self.camera = camera;
         Ok(())
+    }
+
+    /// Whether the frames prepared from now on get their normals
+    /// ([`PreparedFrame::normals`]; on by default). Only the point cloud reads them:
+    /// without them the normal and contour filters drop the same pixels and every
+    /// other output is the same, and preparing skips the averaged normal and its
+    /// 12 bytes a pixel; `normals` is then empty and [`PreparedFrame::for_each_point`]
+    /// gives NaN normals.
+    pub fn set_normals(&mut self, on: bool) {
+        self.keep_normals = on;
     }
 
     /// Prepares `view` into `out`, reusing `out`'s buffers. Fails only on a frame
@@ -357,6 +371,7 @@ impl Preparer {
             &self.ray_x,
             &self.ray_y,
             angles,
+            self.keep_normals,
             &mut out.normals,
             &mut self.normal_drop,
             &mut self.contour_seed,

@@ -47,16 +47,41 @@ pub(crate) fn normals_and_seeds(
     ray_x: &[f32],
     ray_y: &[f32],
     angles: Angles,
+    keep_normals: bool,
     normals: &mut Vec<[f32; 3]>,
     normal_drop: &mut Vec<u8>,
     seed: &mut Vec<u8>,
 ) {
     let (w, h) = (ray_x.len(), ray_y.len());
     let n = w * h;
-    // Every pixel is written below: interior rows by the kernel, the others here.
-    normals.resize(n, [f32::NAN; 3]);
     normal_drop.resize(n, 0);
     seed.resize(n, 0);
+    if !keep_normals {
+        // The same tests, without the averaged normal or its store.
+        normals.clear();
+        normal_drop
+            .par_chunks_mut(w)
+            .zip(seed.par_chunks_mut(w))
+            .enumerate()
+            .with_min_len(rows_per_task(w))
+            .for_each(|(y, (drop, seed))| {
+                if y == 0 || y + 1 >= h || w < 3 {
+                    drop.fill(0);
+                    seed.fill(0);
+                    return;
+                }
+                let rows = [
+                    &z[(y - 1) * w..y * w],
+                    &z[y * w..(y + 1) * w],
+                    &z[(y + 1) * w..(y + 2) * w],
+                ];
+                let ry = [ray_y[y - 1], ray_y[y], ray_y[y + 1]];
+                row_tests(rows, ray_x, ry, angles, drop, seed);
+            });
+        return;
+    }
+    // Every pixel is written below: interior rows by the kernel, the others here.
+    normals.resize(n, [f32::NAN; 3]);
     normals
         .par_chunks_mut(w)
         .zip(normal_drop.par_chunks_mut(w))
@@ -93,6 +118,43 @@ multiversion! {
     ) = row_kernel;
 }
 
+multiversion! {
+    /// [`row`] without the normals: the normal and contour tests only.
+    fn row_tests(
+        z: [&[f32]; 3],
+        ray_x: &[f32],
+        ry: [f32; 3],
+        angles: Angles,
+        drop: &mut [u8],
+        seed: &mut [u8],
+    ) = row_tests_kernel;
+}
+
+#[inline(always)]
+fn row_tests_kernel(
+    z: [&[f32]; 3],
+    ray_x: &[f32],
+    ry: [f32; 3],
+    angles: Angles,
+    drop: &mut [u8],
+    seed: &mut [u8],
+) {
+    row_generic::<false>(z, ray_x, ry, angles, &mut [], drop, seed)
+}
+
+#[inline(always)]
+fn row_kernel(
+    z: [&[f32]; 3],
+    ray_x: &[f32],
+    ry: [f32; 3],
+    angles: Angles,
+    normals: &mut [[f32; 3]],
+    drop: &mut [u8],
+    seed: &mut [u8],
+) {
+    row_generic::<true>(z, ray_x, ry, angles, normals, drop, seed)
+}
+
 #[inline(always)]
 fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
@@ -125,8 +187,10 @@ fn select(m: bool, a: f32) -> f32 {
     if m { a } else { f32::NAN }
 }
 
+/// One interior row: the normal test into `drop`, the contour test into `seed` and,
+/// when `NORMALS`, the averaged normals into `normals` (unused otherwise).
 #[inline(always)]
-fn row_kernel(
+fn row_generic<const NORMALS: bool>(
     z: [&[f32]; 3],
     ray_x: &[f32],
     ry: [f32; 3],
@@ -146,8 +210,10 @@ fn row_kernel(
         let z = zr[x];
         [ray_x[x] * z, ry * z, z]
     };
-    normals[0] = [f32::NAN; 3];
-    normals[w - 1] = [f32::NAN; 3];
+    if NORMALS {
+        normals[0] = [f32::NAN; 3];
+        normals[w - 1] = [f32::NAN; 3];
+    }
     drop[0] = 0;
     drop[w - 1] = 0;
     seed[0] = 0;
@@ -166,15 +232,17 @@ fn row_kernel(
         let both = np_ok & nd_ok;
         let cosang = dot(np, nd);
         let apart = cosang < cos_n;
-        let (avg, avg_ok) = unit(add(np, nd));
-        let away = dot(avg, c) > 0.0;
-        let keep_normal = valid & both & !apart & avg_ok;
-        let sign = if away { -1.0f32 } else { 1.0 };
-        normals[x] = [
-            select(keep_normal, avg[0] * sign),
-            select(keep_normal, avg[1] * sign),
-            select(keep_normal, avg[2] * sign),
-        ];
+        if NORMALS {
+            let (avg, avg_ok) = unit(add(np, nd));
+            let away = dot(avg, c) > 0.0;
+            let keep_normal = valid & both & !apart & avg_ok;
+            let sign = if away { -1.0f32 } else { 1.0 };
+            normals[x] = [
+                select(keep_normal, avg[0] * sign),
+                select(keep_normal, avg[1] * sign),
+                select(keep_normal, avg[2] * sign),
+            ];
+        }
         drop[x] = (normal_filter & valid & !(both & !apart)) as u8;
 
         // Contour: NaN (and false) when c, l or u is missing.
@@ -188,7 +256,7 @@ fn row_kernel(
 multiversion! {
     /// Drops the pixels of `normal_drop` (plus the image border when `normal_filter`)
     /// and the 3x3 neighbourhoods of `seed` from the smoothed depth `z` (`w` wide),
-    /// clears their `normals`, and writes level 0's planes: intensity in [0, 1] and
+    /// clears their `normals` (unless `normals` is empty: none kept), and writes level 0's planes: intensity in [0, 1] and
     /// the filtered depth (NaN where missing). A pixel dropped by both filters counts
     /// as removed by the normal filter. `scratch` holds two rows of masks.
     fn apply_masks(
@@ -249,10 +317,9 @@ fn apply_masks_kernel(
             drop[x] = ((vert[x - 1] | vert[x] | vert[x + 1]) << 1) | nd[x] | border_row;
         }
         let (zr, ir) = (&z[r.clone()], &intensity[r.clone()]);
-        let (pi, pz, nr) = (
+        let (pi, pz) = (
             &mut planes.intensity[r.clone()],
             &mut planes.depth[r.clone()],
-            &mut normals[r],
         );
         for ((((&d, &z), &i), pi), pz) in drop.iter().zip(zr).zip(ir).zip(pi).zip(pz.iter_mut()) {
             let has = !z.is_nan();
@@ -263,9 +330,12 @@ fn apply_masks_kernel(
             *pi = i as f32 * (1.0 / 255.0);
             *pz = if keep { z } else { f32::NAN };
         }
-        for (n, &z) in nr.iter_mut().zip(pz.iter()) {
-            if z.is_nan() {
-                *n = [f32::NAN; 3];
+        // No normals kept (`normals` empty): nothing to clear.
+        if let Some(nr) = normals.get_mut(r) {
+            for (n, &z) in nr.iter_mut().zip(pz.iter()) {
+                if z.is_nan() {
+                    *n = [f32::NAN; 3];
+                }
             }
         }
     }

@@ -509,3 +509,69 @@ fn an_untracked_level_gets_no_samples_and_changes_nothing_else() {
         });
     }
 }
+
+/// A preparer that keeps no normals drops the same pixels and writes the same levels,
+/// templates and counts as one that does, bit for bit, on every SIMD path and for
+/// every filter setting; its frames have no normals, and turning them back on gives
+/// them again.
+#[test]
+fn frames_without_normals_are_the_same_frames() {
+    let cam = SynthCamera::phone_320x180();
+    let seq = SynthSequence::phone_320x180(8, 3);
+    let c = Camera {
+        width: cam.width,
+        height: cam.height,
+        fx: cam.fx,
+        fy: cam.fy,
+        cx: cam.cx,
+        cy: cam.cy,
+        depth_scale: cam.depth_scale,
+    };
+    let mut configs = vec![
+        Config::new(c, Preset::Pc, Mode::L2),
+        Config::new(c, Preset::Phone, Mode::L2),
+    ];
+    let mut contour_only = Config::new(c, Preset::Pc, Mode::L2);
+    contour_only.filter.normal_max_angle_deg = None;
+    configs.push(contour_only);
+    for (k, config) in configs.iter().enumerate() {
+        let (mut with, mut without) = (Preparer::new(config), Preparer::new(config));
+        without.set_normals(false);
+        let (mut fw, mut fo) = (
+            PreparedFrame::for_config(config),
+            PreparedFrame::for_config(config),
+        );
+        for i in [0, 3, 4] {
+            let f = seq.frame(i);
+            let view = FrameView {
+                timestamp: f.timestamp,
+                intensity: &f.intensity,
+                depth: &f.depth,
+            };
+            simd::on_each_path(|path| {
+                with.prepare_into(view, &mut fw).unwrap();
+                without.prepare_into(view, &mut fo).unwrap();
+                let what = format!("config {k} frame {i} {path}");
+                assert!(fo.normals.is_empty(), "{what}");
+                assert!(fw.normals.iter().any(|n| n[0].is_finite()), "{what}");
+                assert!(
+                    fo.removed_by_normal + fo.removed_by_contour > 0 || k == 2,
+                    "{what}"
+                );
+                let mut fo_with = fo.clone();
+                fo_with.normals = fw.normals.clone();
+                same(&fo_with, &fw, &what);
+            });
+        }
+        without.set_normals(true);
+        let f = seq.frame(5);
+        let view = FrameView {
+            timestamp: f.timestamp,
+            intensity: &f.intensity,
+            depth: &f.depth,
+        };
+        with.prepare_into(view, &mut fw).unwrap();
+        without.prepare_into(view, &mut fo).unwrap();
+        same(&fo, &fw, &format!("config {k}, normals on again"));
+    }
+}
