@@ -1,5 +1,7 @@
 //! Criterion benches of the two per-frame stages on one thread: the filter stage
-//! (`Preparer::prepare_into`) and frame-to-frame MOTION (`frame_to_frame`, the call
+//! (`Preparer::prepare_into`; `prepare/` with the normals a point cloud reads,
+//! `prepare-tracking/` without them, as the pipeline prepares without a geometry
+//! stage) and frame-to-frame MOTION (`frame_to_frame`, the call
 //! the tracker makes for [A], from the identity) at 320x180, 320x240 and 640x480.
 //!
 //! The frames are rendered by ecvo-synth (the standard room, a hand-held path, the
@@ -104,6 +106,22 @@ fn benches(c: &mut Criterion) {
             pool.install(|| {
                 b.iter(|| {
                     preparer.prepare_into(view(&cur), &mut out).unwrap();
+                    black_box(out.valid_depth)
+                })
+            })
+        });
+        group.finish();
+
+        // The tracking path: no normals (what the pipeline prepares without a
+        // geometry stage: `ecvo run`, Python, JNI without a point cloud).
+        let mut tracking = preparer.clone();
+        tracking.set_normals(false);
+        let mut group = c.benchmark_group("prepare-tracking");
+        group.bench_function(name, |b| {
+            let mut out = PreparedFrame::for_config(&config);
+            pool.install(|| {
+                b.iter(|| {
+                    tracking.prepare_into(view(&cur), &mut out).unwrap();
                     black_box(out.valid_depth)
                 })
             })
