@@ -305,8 +305,40 @@ pub struct Config {
     /// is ([`crate::correction::fuse_correction`]), without making the frame a
     /// reference: while a reference lives long (slow motion), the chain's error is
     /// pulled back to it between corrections. Needs `fuse_corrections`; 0 switches it
-    /// off, as [`Config::paper`] does.
+    /// off, as [`Config::paper`] does. With [`Config::keyframes`], every this many
+    /// frames after the keyframe the registration against it is fused with the chain
+    /// through the previous frame (one more `MOTION` call), as a new keyframe's is.
     pub refine_every: u32,
+    /// Keyframe tracking (issue 26, as DVO-SLAM and visual-odometry-rs do): every
+    /// frame is registered against the level-1 reference, the keyframe, instead of
+    /// against the previous frame, seeded with the previous frame's pose and with the
+    /// constant-velocity prediction (the better start at the coarsest step wins). The
+    /// frame becomes the new keyframe (the level-1 reference, without a correction:
+    /// it is registered against the old one already) when the motion since the
+    /// keyframe passes level 1's `comp`, when fewer than
+    /// [`Config::keyframe_min_overlap`] of the keyframe's finest template points
+    /// still land on the frame, or when the registration against the keyframe is not
+    /// believed and the frame registered against the previous frame instead. A new
+    /// keyframe's registration is fused with the chain through the previous frame
+    /// (its registration against the keyframe, then \[A\]) as a correction is, with
+    /// `fuse_corrections`. Levels 2 and up correct as in the paper. Needs at least one
+    /// reference level. Off by default (chosen on the suite: better on slow motion,
+    /// worse on the real sequences) and in [`Config::paper`].
+    pub keyframes: bool,
+    /// With [`Config::keyframes`]: a frame on which fewer than this fraction of the
+    /// keyframe's finest template points land (valid residuals) becomes the new
+    /// keyframe. In `[0, 1]`; 0 leaves only the motion thresholds.
+    pub keyframe_min_overlap: f64,
+    /// With [`Config::keyframes`]: a registration against the keyframe whose
+    /// intensity or depth residual spread (the bivariate scale's `√Σ_II`, `√Σ_ZZ`) is
+    /// more than this many times the median of the recent believed registrations' is
+    /// not believed (it may have converged to another minimum, or the keyframe is out
+    /// of date): the frame registers against the previous frame and becomes the new
+    /// keyframe. Bivariate weighting only; `f64::INFINITY` (the default) switches it
+    /// off: at 2 it refused good registrations on noise-free depth, whose tiny spreads
+    /// vary by more than that from frame to frame, and lost more on the suite than it
+    /// saved (issue 26's closing note).
+    pub keyframe_max_spread_growth: f64,
     /// A frame becomes an anchor after a loss only with at least this fraction of
     /// its pixels carrying depth after filtering.
     pub min_anchor_depth_fraction: f64,
@@ -384,6 +416,9 @@ impl Config {
             max_spread_jump: 5.0,
             fuse_corrections: true,
             refine_every: 3,
+            keyframes: false,
+            keyframe_min_overlap: 0.5,
+            keyframe_max_spread_growth: f64::INFINITY,
             min_anchor_depth_fraction: 0.05,
             min_anchor_texture_fraction: 0.02,
             memory_budget: crate::memory::DEFAULT_MEMORY_BUDGET,
@@ -410,6 +445,7 @@ impl Config {
         c.max_spread_jump = f64::INFINITY;
         c.fuse_corrections = false;
         c.refine_every = 0;
+        c.keyframes = false;
         c.motion.max_intensity_sigma = f64::INFINITY;
         c.motion.max_depth_sigma_m = f64::INFINITY;
         c
@@ -584,7 +620,21 @@ impl Config {
                 format!("{} is not positive", self.max_correction_distance),
             );
         }
+        if self.keyframes && self.reference_levels.is_empty() {
+            return bad(
+                "keyframes",
+                "keyframe tracking needs a reference level (the keyframe is the level-1 reference)"
+                    .into(),
+            );
+        }
+        if !(self.keyframe_max_spread_growth >= 1.0) {
+            return bad(
+                "keyframe_max_spread_growth",
+                format!("{} is not at least 1", self.keyframe_max_spread_growth),
+            );
+        }
         for (field, v) in [
+            ("keyframe_min_overlap", self.keyframe_min_overlap),
             ("min_anchor_depth_fraction", self.min_anchor_depth_fraction),
             (
                 "min_anchor_texture_fraction",

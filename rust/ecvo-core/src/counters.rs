@@ -43,6 +43,21 @@ pub struct Counters {
     /// depth residuals both spread more than [`crate::Config::max_spread_jump`] times wider
     /// than the recent frame-to-frame registrations' ([`crate::spread`]).
     pub spread_jumps: u64,
+    /// With keyframe tracking ([`crate::Config::keyframes`]): frames whose
+    /// registration against the keyframe was not believed and that registered against
+    /// the previous frame instead (they became the new keyframe).
+    pub keyframe_fallbacks: u64,
+    /// With keyframe tracking: keyframes made because too few of the old keyframe's
+    /// points still landed on the frame ([`crate::Config::keyframe_min_overlap`]).
+    pub overlap_keyframes: u64,
+    /// With keyframe tracking: registrations against the keyframe refused because
+    /// their residuals spread wider than the recent ones'
+    /// ([`crate::Config::keyframe_max_spread_growth`]).
+    pub keyframe_spread_refusals: u64,
+    /// With keyframe tracking and fused corrections: new keyframes whose registration
+    /// against the old one was fused with the chain through the previous frame (one
+    /// more `MOTION` call each).
+    pub keyframe_fusions: u64,
     /// Times the fitted depth-noise model ([`crate::DepthNoiseModel::Fitted`]) changed.
     pub noise_refits: u64,
 }

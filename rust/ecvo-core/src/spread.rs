@@ -53,6 +53,17 @@ impl SpreadWatch {
         s.ii.sqrt() > factor * mi && s.zz.sqrt() > factor * mz
     }
 
+    /// True when either spread of `s` exceeds `factor` times the median of the
+    /// remembered ones (false with nothing remembered): a registration against a
+    /// keyframe that explains the frame worse than the recent ones did.
+    pub fn is_wider(&self, s: &Scale, factor: f64) -> bool {
+        if self.len == 0 || !factor.is_finite() {
+            return false;
+        }
+        let (mi, mz) = self.medians();
+        s.ii.sqrt() > factor * mi || s.zz.sqrt() > factor * mz
+    }
+
     /// The medians of the remembered intensity and depth spreads.
     fn medians(&self) -> (f64, f64) {
         let mut i = [0.0f64; HISTORY];

@@ -28,6 +28,9 @@ pub use crate::prior::{Velocity, predict};
 use crate::se3;
 use crate::spread::SpreadWatch;
 
+mod keyframe;
+use keyframe::KeyframeStep;
+
 /// `comp(T, (εd, εa))`: true when `‖t‖ > εd` or `tr(R) < 2 cos εa + 1`, i.e. when the
 /// motion since the reference calls for a correction (section 3.2).
 pub fn comp(t: &Pose, level: &ReferenceLevel) -> bool {
@@ -63,7 +66,10 @@ pub struct FrameOutput {
     pub reference_levels: u8,
     /// `MOTION` calls spent on this frame.
     pub motion_estimations: u32,
-    /// The frame-to-frame estimate `T_{c,p}` of box \[A\] (None for the first frame).
+    /// The frame-to-frame estimate `T_{c,p}` of box \[A\] (None for the first frame);
+    /// with keyframe tracking, the registration that gave the pose: against the
+    /// keyframe, or against the previous frame (when it is the keyframe, or after a
+    /// fall-back).
     pub frame_to_frame: Option<MotionResult>,
     /// After too many lost frames the tracker started afresh at this frame, keeping
     /// the last good pose.
@@ -157,6 +163,9 @@ pub struct Tracker<F> {
     correcting: MotionConfig,
     /// The depth-noise model's fit ([`DepthNoiseModel::Fitted`]).
     noise: NoiseFit,
+    /// With keyframe tracking: the covariance of the previous frame's pose relative
+    /// to the keyframe (zero when it is the keyframe; `None` when unknown).
+    keyframe_chain: Option<Matrix6<f64>>,
 }
 
 impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
@@ -185,6 +194,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
                 ..working_motion(&config.motion)
             },
             noise: NoiseFit::new(config.motion.depth_noise),
+            keyframe_chain: None,
             config,
         })
     }
@@ -289,44 +299,88 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             return out;
         }
         let prior = self.prior_for(frame.timestamp);
-        let Some(prev) = &self.prev else {
+        let Some(prev) = self.prev.clone() else {
             unreachable!("checked above")
         };
 
-        // [A] frame to frame, from the identity or the prediction.
-        let f2f = match ahead(&prev.frame, prior.as_ref(), self.motion.depth_noise) {
-            Some(r) => r,
-            None => frame_to_frame(
-                &mut self.estimator,
-                &frame,
-                &prev.frame,
-                prior.as_ref(),
-                &self.motion,
-            ),
+        // [A] frame to frame, from the identity or the prediction; with keyframe
+        // tracking, against the keyframe (the level-1 reference) from the previous
+        // frame's pose and the prediction, unless the keyframe is the previous frame.
+        let keyframe = self
+            .config
+            .keyframes
+            .then(|| self.refs.first().and_then(|r| r.clone()))
+            .flatten()
+            .filter(|k| k.index != prev.index);
+        let f2f = match &keyframe {
+            Some(k) => self.register_keyframe(&frame, k, &prev, prior.as_ref()),
+            None => match ahead(&prev.frame, prior.as_ref(), self.motion.depth_noise) {
+                Some(r) => r,
+                None => frame_to_frame(
+                    &mut self.estimator,
+                    &frame,
+                    &prev.frame,
+                    prior.as_ref(),
+                    &self.motion,
+                ),
+            },
         };
         out.motion_estimations += 1;
         self.counters.motion_estimations += 1;
         out.frame_to_frame = Some(f2f);
-        let predicted = prior.map_or(Pose::identity(), |p| se3::compose(&prev.pose, &p));
+        let predicted = prior.map_or(prev.pose, |p| se3::compose(&prev.pose, &p));
         let dt = frame.timestamp - prev.frame.timestamp;
-        let believed = f2f.is_ok()
+        // The pose the registration gives and the move from the previous frame.
+        let base_pose = keyframe.as_ref().map_or(prev.pose, |k| k.pose);
+        let mut registered = se3::compose(&base_pose, &f2f.pose);
+        let mut moved = match &keyframe {
+            Some(_) => se3::compose(&prev.pose.inverse(), &registered),
+            None => f2f.pose,
+        };
+        let mut reg = f2f;
+        let mut believed = f2f.is_ok()
             && believable(
                 &self.config,
                 &self.spread,
                 &mut self.counters,
                 &f2f,
-                &f2f.pose,
+                &moved,
                 dt,
             );
+        if believed
+            && keyframe.is_some()
+            && self.config.motion.weighting == Weighting::Bivariate
+            && f2f.scale.is_some_and(|s| {
+                self.spread
+                    .is_wider(&s, self.config.keyframe_max_spread_growth)
+            })
+        {
+            self.counters.keyframe_spread_refusals += 1;
+            believed = false;
+        }
+        // Keyframe tracking: the keyframe did not register; try the previous frame,
+        // which then becomes the new keyframe.
+        let mut fell_back = false;
+        if !believed
+            && keyframe.is_some()
+            && let Some(r) = self.keyframe_fallback(&frame, &prev, prior.as_ref(), dt, &mut out)
+        {
+            fell_back = true;
+            believed = true;
+            reg = r;
+            out.frame_to_frame = Some(r);
+            registered = se3::compose(&prev.pose, &r.pose);
+            moved = r.pose;
+        }
         let mut pose = if believed {
-            if let Some(s) = &f2f.scale {
+            if let Some(s) = &reg.scale {
                 self.spread.record(s);
             }
-            if f2f.start > 0 {
+            if reg.start > 0 {
                 self.counters.predicted_starts += 1;
             }
             if self.config.motion.depth_noise == DepthNoiseModel::Fitted
-                && let Some(m) = self.noise.record(&f2f.depth_spread)
+                && let Some(m) = self.noise.record(&reg.depth_spread)
             {
                 self.motion.depth_noise = m;
                 self.correcting.depth_noise = m;
@@ -337,13 +391,14 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             // also what the pipeline's filter stage can know without the tracker).
             self.velocity = (prev.index + 1 == index).then(|| Velocity {
                 index,
-                motion: f2f.pose,
+                motion: moved,
                 dt: frame.timestamp - prev.frame.timestamp,
             });
-            se3::compose(&prev.pose, &f2f.pose)
+            registered
         } else {
             self.velocity = None;
-            match self.recover(&frame, &predicted, dt, &mut out) {
+            let skip = keyframe.as_ref().map(|k| k.index);
+            match self.recover(&frame, &predicted, dt, skip, &mut out) {
                 Some(p) => p,
                 None => return self.lose(frame, index, out),
             }
@@ -351,26 +406,57 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         self.lost_run = 0;
         self.state = TrackingState::Tracking;
         let add = if believed && self.config.fuse_corrections {
-            f2f.information.try_inverse()
+            reg.information.try_inverse()
         } else {
             None
         };
-        for c in &mut self.chain {
-            *c = match (*c, add) {
-                (Some(c), Some(a)) => Some(chain_step(&c, &f2f.pose, &a)),
-                _ => None,
-            };
+        let new_keyframe = self.config.keyframes
+            && self.keyframe_update(
+                &frame,
+                &prev,
+                prior.as_ref(),
+                &KeyframeStep {
+                    index,
+                    dt,
+                    keyframe: keyframe.as_ref(),
+                    reg: &reg,
+                    believed,
+                    fell_back,
+                    add,
+                },
+                &mut pose,
+                &mut out,
+            );
+        if !self.config.keyframes {
+            for c in &mut self.chain {
+                *c = match (*c, add) {
+                    (Some(c), Some(a)) => Some(chain_step(&c, &f2f.pose, &a)),
+                    _ => None,
+                };
+            }
         }
 
-        if believed {
+        if believed && !self.config.keyframes {
             self.refine(&frame, index, &mut pose, &mut out);
         }
 
         // [B], [C], ...: correct against each level's reference while the motion
         // accumulated since it is large enough. A correction that fails, or lands
-        // implausibly far from its guess, changes nothing and ends the climb.
+        // implausibly far from its guess, changes nothing and ends the climb. With
+        // keyframe tracking level 1 needs no correction (the frame is registered
+        // against its reference): a new keyframe starts the climb at level 2.
         let mut became = 0usize;
-        for (k, level) in self.config.reference_levels.iter().enumerate() {
+        let first = match (self.config.keyframes, new_keyframe) {
+            (false, _) => 0,
+            (true, true) => {
+                self.counters.references[0] += 1;
+                self.refused[0] = 0;
+                became = 1;
+                1
+            }
+            (true, false) => self.config.reference_levels.len(),
+        };
+        for (k, level) in self.config.reference_levels.iter().enumerate().skip(first) {
             let Some(reference) = &self.refs[k] else {
                 break;
             };
@@ -485,19 +571,25 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         frame: &F,
         predicted: &Pose,
         dt: f64,
+        tried_keyframe: Option<u64>,
         out: &mut FrameOutput,
     ) -> Option<Pose> {
         let prev_index = self.prev.as_ref().map(|p| p.index);
         let prev_pose = self.prev.as_ref().map_or(Pose::identity(), |p| p.pose);
-        let mut tried: Option<u64> = prev_index;
         for k in 0..self.refs.len() {
             let Some(reference) = &self.refs[k] else {
                 continue;
             };
-            if tried == Some(reference.index) {
+            // Each frame once: not the previous frame, not the keyframe already tried,
+            // not a lower level's reference that is the same frame.
+            let seen = Some(reference.index) == prev_index
+                || Some(reference.index) == tried_keyframe
+                || self.refs[..k]
+                    .iter()
+                    .any(|r| r.as_ref().is_some_and(|r| r.index == reference.index));
+            if seen {
                 continue;
             }
-            tried = Some(reference.index);
             let init = se3::compose(&reference.pose.inverse(), predicted);
             let r = self
                 .estimator
@@ -528,6 +620,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
     /// The frame did not register: it keeps the last good pose; after too many in a
     /// row the tracker starts afresh at a frame good enough to anchor on.
     fn lose(&mut self, frame: F, index: u64, mut out: FrameOutput) -> FrameOutput {
+        self.keyframe_chain = None;
         for c in &mut self.chain {
             *c = None;
         }
@@ -556,6 +649,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
 
     /// Makes `frame` the previous frame and the reference at every level.
     fn anchor(&mut self, frame: F, pose: Pose, index: u64) {
+        self.keyframe_chain = Some(Matrix6::zeros());
         for c in &mut self.chain {
             *c = Some(Matrix6::zeros());
         }

@@ -46,6 +46,12 @@ impl Chain {
         offline: bool,
         published: Published,
     ) -> Option<Option<Pose>> {
+        // With keyframe tracking a frame registers against the keyframe, which this
+        // stage does not know (nor the prediction, which comes from those
+        // registrations): nothing to compute ahead.
+        if config.keyframes {
+            return None;
+        }
         let (seq, prev_stamp, own) = self.last?;
         if seq != prev.sequence() {
             return None;

@@ -238,6 +238,10 @@ pub(crate) fn copy_counters(dst: &mut Counters, src: &Counters) {
         reanchors,
         implausible_motions,
         spread_jumps,
+        keyframe_fallbacks,
+        overlap_keyframes,
+        keyframe_spread_refusals,
+        keyframe_fusions,
         noise_refits,
     } = src;
     dst.frames = *frames;
@@ -254,6 +258,10 @@ pub(crate) fn copy_counters(dst: &mut Counters, src: &Counters) {
     dst.reanchors = *reanchors;
     dst.implausible_motions = *implausible_motions;
     dst.spread_jumps = *spread_jumps;
+    dst.keyframe_fallbacks = *keyframe_fallbacks;
+    dst.overlap_keyframes = *overlap_keyframes;
+    dst.keyframe_spread_refusals = *keyframe_spread_refusals;
+    dst.keyframe_fusions = *keyframe_fusions;
     dst.noise_refits = *noise_refits;
 }
 

@@ -94,6 +94,46 @@ fn offline_poses_equal_sequential_odometry_bit_for_bit_at_1_2_and_4_threads() {
     }
 }
 
+#[test]
+fn keyframe_tracking_offline_equals_sequential_odometry_bit_for_bit() {
+    let (config, frames) = stream();
+    let mut config = config.clone();
+    config.keyframes = true;
+    let (expected, odo) = sequential(&config, frames);
+    let c = odo.tracker().counters();
+    assert!(
+        c.references[0] > 0 && c.keyframe_fusions > 0,
+        "the stream must make keyframes: {c:?}"
+    );
+    for threads in [1, 2] {
+        let pipeline = Pipeline::new(
+            config.clone(),
+            PipelineOptions {
+                threads,
+                keep_trajectory: true,
+                ..PipelineOptions::default()
+            },
+        )
+        .unwrap();
+        for f in frames {
+            assert_eq!(pipeline.push_view(f.view()).unwrap(), PushStatus::Accepted);
+        }
+        pipeline.close_input();
+        let summary = pipeline.finish().unwrap();
+        assert_eq!(summary.trajectory.len(), expected.len());
+        for (i, (rec, want)) in summary.trajectory.iter().zip(&expected).enumerate() {
+            assert_eq!(
+                common::bits(&rec.pose),
+                common::bits(&want.pose),
+                "frame {i}, {threads} threads"
+            );
+        }
+        assert_eq!(&summary.stats.counters, odo.tracker().counters());
+        // The filter stage cannot know the keyframe: it computes nothing ahead.
+        assert_eq!(summary.stats.ahead_computed, 0);
+    }
+}
+
 /// Distinct frames the tracker holds after `outs`: the previous frame and the
 /// reference of each level.
 fn held_by_tracker(outs: &[FrameOutput], levels: usize) -> usize {
