@@ -4,7 +4,8 @@
 //!
 //! Every error is printed as one message naming the file (and line) involved, and
 //! the process exits with status 1 (2 for unusable command-line flags).
-
+// The run summary is one `json!` literal, deeper than the default limit allows.
+#![recursion_limit = "256"]
 // The help texts are these doc comments, and they name the paper's motion
 // estimations [A], [B], [C] as the paper does: not links.
 #![allow(rustdoc::broken_intra_doc_links)]
@@ -307,6 +308,21 @@ struct TrackArgs {
     /// 0: off, as --paper does).
     #[arg(long)]
     refine_every: Option<u32>,
+    /// What each frame is registered against: the previous frame (chain, the
+    /// paper's frame-to-frame tracking) or the level-1 reference (keyframe: a new
+    /// keyframe when the motion since it passes level 1's thresholds or the overlap
+    /// drops; refinement is then off).
+    #[arg(long, value_enum)]
+    tracking: Option<TrackingArg>,
+    /// With --tracking keyframe: a new keyframe when fewer than this fraction of the
+    /// keyframe's finest template points land on the frame (0 to 1).
+    #[arg(long)]
+    keyframe_overlap: Option<f64>,
+    /// With --tracking keyframe: refuse a registration against the keyframe whose
+    /// residuals spread more than this many times wider than the recent ones' (the
+    /// frame registers against the previous frame and becomes the keyframe; inf: off).
+    #[arg(long)]
+    keyframe_spread: Option<f64>,
     /// Make any skipped frame an error: a list entry without a partner within
     /// 0.02 s, a frame identical to the previous one, a timestamp not after the
     /// previous one (by default each is a warning, counted in the frame account).
@@ -347,6 +363,12 @@ fn parse_bytes(text: &str) -> std::result::Result<usize, String> {
         return Err(format!("`{text}` is not a usable size"));
     }
     Ok(bytes as usize)
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum TrackingArg {
+    Chain,
+    Keyframe,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -418,6 +440,9 @@ impl TrackArgs {
             scale_passes: self.scale_passes,
             fuse_corrections: self.corrections.map(|c| matches!(c, CorrectionsArg::Fuse)),
             refine_every: self.refine_every,
+            keyframes: self.tracking.map(|t| matches!(t, TrackingArg::Keyframe)),
+            keyframe_min_overlap: self.keyframe_overlap,
+            keyframe_max_spread_growth: self.keyframe_spread,
         };
         TrackSettings {
             frame_step: self.frame_step as usize,

@@ -73,6 +73,12 @@ pub struct EngineChoice {
     pub scale_passes: Option<usize>,
     /// Register every Nth frame after the level-1 reference against it (0: off).
     pub refine_every: Option<u32>,
+    /// Register against the keyframe (true) or the previous frame (false).
+    pub keyframes: Option<bool>,
+    /// Overlap below which a frame becomes the new keyframe.
+    pub keyframe_min_overlap: Option<f64>,
+    /// Spread growth above which a keyframe registration is refused.
+    pub keyframe_max_spread_growth: Option<f64>,
 }
 
 impl EngineChoice {
@@ -121,6 +127,10 @@ impl EngineChoice {
             config.max_correction_distance,
             if config.fuse_corrections { "fused" } else { "replaced" },
             match config.refine_every {
+                _ if config.keyframes => format!(
+                    ", keyframe tracking (new keyframe below {} overlap or above {}x spread)",
+                    config.keyframe_min_overlap, config.keyframe_max_spread_growth
+                ),
                 0 => String::new(),
                 n if config.fuse_corrections => {
                     format!(", refined against the level-1 reference every {n} frames")
@@ -242,6 +252,15 @@ impl TrackSettings {
         }
         if let Some(n) = e.refine_every {
             config.refine_every = n;
+        }
+        if let Some(k) = e.keyframes {
+            config.keyframes = k;
+        }
+        if let Some(f) = e.keyframe_min_overlap {
+            config.keyframe_min_overlap = f;
+        }
+        if let Some(f) = e.keyframe_max_spread_growth {
+            config.keyframe_max_spread_growth = f;
         }
         if let Some(text) = &self.levels {
             config.reference_levels =

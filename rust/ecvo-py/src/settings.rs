@@ -27,6 +27,9 @@ pub const ENGINE_KEYS: &[&str] = &[
     "scale_passes",
     "corrections",
     "refine_every",
+    "tracking",
+    "keyframe_overlap",
+    "keyframe_spread",
 ];
 
 /// How the engine is configured, beyond the camera.
@@ -51,6 +54,9 @@ pub struct EngineSettings {
     pub scale_passes: Option<usize>,
     pub fuse_corrections: Option<bool>,
     pub refine_every: Option<u32>,
+    pub keyframes: Option<bool>,
+    pub keyframe_min_overlap: Option<f64>,
+    pub keyframe_max_spread_growth: Option<f64>,
 }
 
 /// Parses `preset` / `mode` names.
@@ -233,6 +239,9 @@ impl EngineSettings {
             scale_passes: kw.take("scale_passes", "an int >= 0")?,
             fuse_corrections: choice(kw, "corrections", &[("fuse", true), ("replace", false)])?,
             refine_every: kw.take("refine_every", "an int >= 0")?,
+            keyframes: choice(kw, "tracking", &[("chain", false), ("keyframe", true)])?,
+            keyframe_min_overlap: take_f64(kw, "keyframe_overlap")?,
+            keyframe_max_spread_growth: take_f64(kw, "keyframe_spread")?,
         })
     }
 
@@ -286,6 +295,15 @@ impl EngineSettings {
         }
         if let Some(n) = self.refine_every {
             config.refine_every = n;
+        }
+        if let Some(k) = self.keyframes {
+            config.keyframes = k;
+        }
+        if let Some(f) = self.keyframe_min_overlap {
+            config.keyframe_min_overlap = f;
+        }
+        if let Some(f) = self.keyframe_max_spread_growth {
+            config.keyframe_max_spread_growth = f;
         }
         if let Some(text) = &self.levels {
             config.reference_levels = parse_levels(text).map_err(|e| bad("levels", e))?;

@@ -132,6 +132,10 @@ pub fn counters_dict<'py>(py: Python<'py>, c: &Counters) -> PyResult<Bound<'py, 
     d.set_item("refinements", c.refinements)?;
     d.set_item("refused_refinements", c.refused_refinements)?;
     d.set_item("spread_jumps", c.spread_jumps)?;
+    d.set_item("keyframe_fallbacks", c.keyframe_fallbacks)?;
+    d.set_item("overlap_keyframes", c.overlap_keyframes)?;
+    d.set_item("keyframe_spread_refusals", c.keyframe_spread_refusals)?;
+    d.set_item("keyframe_fusions", c.keyframe_fusions)?;
     Ok(d)
 }
 

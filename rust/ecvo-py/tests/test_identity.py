@@ -50,6 +50,10 @@ def test_run_sequence_ate_under_2mm(synth):
             ("--paper", "--levels", "20mm:5deg,80mm:10deg", "--threads", "1"),
             dict(paper=True, levels="20mm:5deg,80mm:10deg", threads=1),
         ),
+        (
+            ("--tracking", "keyframe", "--keyframe-overlap", "0.6", "--max-frames", "60"),
+            dict(tracking="keyframe", keyframe_overlap=0.6, max_frames=60),
+        ),
     ],
 )
 def test_settings_map_to_the_same_flags(synth, cli_run, flags, settings):

@@ -129,7 +129,7 @@ class Tracker:
     ``prior`` ("identity", "velocity"), ``max_correction_distance``,
     ``max_fine_depth_weight``, ``min_predicted_decrease``, ``min_update_px``
     (floats), ``scale_passes``, ``refine_every`` (ints), ``corrections`` ("fuse",
-    "replace"). An unknown keyword is a TypeError, a bad value a ValueError.
+    "replace"), ``tracking`` ("chain", "keyframe"), ``keyframe_overlap``, ``keyframe_spread`` (floats). An unknown keyword is a TypeError, a bad value a ValueError.
 
     One tracker is used by one thread at a time; several trackers run in parallel on
     several threads (the GIL is released while a frame is tracked).
