@@ -52,7 +52,6 @@ Prints a Markdown table and writes DIR/peers.json.
 """
 
 import argparse
-import bisect
 import json
 import os
 import subprocess
@@ -60,6 +59,7 @@ import sys
 import time
 
 import timing
+from assoc import MAX_DT, associate, read_list
 
 
 def _pin_from_argv(argv):
@@ -84,47 +84,9 @@ os.environ["OMP_NUM_THREADS"] = "1"
 import numpy as np  # noqa: E402 (after the affinity and OMP_NUM_THREADS)
 import cv2  # noqa: E402
 
-MAX_DT = 0.02
 
 # One thread, as ecvo's ms_per_frame.total is measured.
 cv2.setNumThreads(1)
-
-
-def read_list(path):
-    """(stamp, relative path) pairs of a TUM rgb.txt / depth.txt, '#' lines skipped."""
-    out = []
-    with open(path) as f:
-        for line in f:
-            line = line.strip()
-            if not line or line.startswith("#"):
-                continue
-            parts = line.split()
-            out.append((float(parts[0]), parts[1]))
-    return out
-
-
-def associate(rgb, depth, max_dt=MAX_DT):
-    """Pairs (rgb, depth) entries whose stamps differ by less than max_dt: closest
-    pairs first, each entry used at most once; result sorted by colour stamp."""
-    dstamps = [d[0] for d in depth]
-    cands = []
-    for i, (t, _) in enumerate(rgb):
-        lo = bisect.bisect_left(dstamps, t - max_dt)
-        hi = bisect.bisect_right(dstamps, t + max_dt)
-        for j in range(lo, hi):
-            dt = abs(dstamps[j] - t)
-            if dt < max_dt:
-                cands.append((dt, i, j))
-    cands.sort()
-    used_r, used_d, pairs = set(), set(), []
-    for _, i, j in cands:
-        if i in used_r or j in used_d:
-            continue
-        used_r.add(i)
-        used_d.add(j)
-        pairs.append((rgb[i], depth[j]))
-    pairs.sort(key=lambda p: p[0][0])
-    return pairs
 
 
 def load_sequence(seq):

@@ -13,6 +13,9 @@
 //! cargo run --release -p ecvo-pipeline --example throughput -- tum_fr1_xyz_full300 --threads 2 --repeat 3
 //! # one engine only (to time whole processes from outside):
 //! cargo run --release -p ecvo-pipeline --example throughput -- tum_fr1_xyz_half --only pipeline
+//! # decode the frames and track nothing (the baseline to subtract from a whole-process
+//! # count, scripts/profile/insn-aarch64.sh):
+//! cargo run --release -p ecvo-pipeline --example throughput -- tum_fr1_xyz_half --only decode
 //! ```
 //!
 //! The dataset is a folder name under the shared datasets folder (see
@@ -55,7 +58,7 @@ fn parse() -> Result<Args, String> {
             "-h" | "--help" => {
                 return Err(
                     "usage: throughput DATASET [--frames N] [--threads T] [--repeat R] \
-                            [--only pipeline|sequential] [--mode naive|l1|l2]"
+                            [--only pipeline|sequential|decode] [--mode naive|l1|l2]"
                         .into(),
                 );
             }
@@ -69,8 +72,11 @@ fn parse() -> Result<Args, String> {
     if let Some(o) = &a.only
         && o != "pipeline"
         && o != "sequential"
+        && o != "decode"
     {
-        return Err(format!("--only {o}: expected pipeline or sequential"));
+        return Err(format!(
+            "--only {o}: expected pipeline, sequential or decode"
+        ));
     }
     a.repeat = a.repeat.max(1);
     Ok(a)
@@ -166,6 +172,9 @@ fn main() -> ExitCode {
         args.threads,
         std::thread::available_parallelism().map_or(0, |c| c.get()),
     );
+    if args.only.as_deref() == Some("decode") {
+        return ExitCode::SUCCESS;
+    }
     let config = Config::new(*cam, Preset::Pc, args.mode);
 
     let (mut seq_fps, mut par_fps, mut pipe_fps) = (Vec::new(), Vec::new(), Vec::new());

@@ -13,6 +13,10 @@
 //! reading and decoding the PNGs is not counted. vors is single-threaded: the last line,
 //! `vors-cam-threads MAX`, is the most threads `/proc/self/task` listed after any frame,
 //! and the thread and process CPU times agree when it is 1.
+//!
+//! `vors-cam --decode-only CAMERA_JSON ASSOCIATIONS` reads and decodes the same images
+//! and tracks nothing: the baseline to subtract from a whole-process count
+//! (scripts/profile/insn-aarch64.sh).
 
 use std::error::Error;
 use std::path::Path;
@@ -73,9 +77,13 @@ fn read_images(depth: &Path, color: &Path) -> Res<(DMatrix<u16>, DMatrix<u8>)> {
 }
 
 fn main() -> Res<()> {
-    let args: Vec<String> = std::env::args().collect();
+    let mut args: Vec<String> = std::env::args().collect();
+    let decode_only = args.get(1).is_some_and(|a| a == "--decode-only");
+    if decode_only {
+        args.remove(1);
+    }
     if args.len() != 3 {
-        return Err("usage: vors-cam CAMERA_JSON ASSOCIATIONS".into());
+        return Err("usage: vors-cam [--decode-only] CAMERA_JSON ASSOCIATIONS".into());
     }
     let cam = std::fs::read_to_string(&args[1])?;
     let intrinsics = Intrinsics {
@@ -102,6 +110,12 @@ fn main() -> Res<()> {
         &dir.join(&assoc[0].depth_file_path),
         &dir.join(&assoc[0].color_file_path),
     )?;
+    if decode_only {
+        for a in assoc.iter().skip(1) {
+            read_images(&dir.join(&a.depth_file_path), &dir.join(&a.color_file_path))?;
+        }
+        return Ok(());
+    }
     let t = Instant::now();
     let mut tracker = config.init(assoc[0].depth_timestamp, &d0, assoc[0].color_timestamp, i0);
     eprintln!("vors-cam-init-ms {:.3}", t.elapsed().as_secs_f64() * 1e3);
