@@ -4,40 +4,8 @@
 mod common;
 
 use common::*;
-use ecvo_core::{Config, Error, FrameOutput, FrameView, Mode, Odometry};
+use ecvo_core::{Config, Error, Mode, Odometry};
 use ecvo_synth::{DepthNoise, SynthSequence};
-
-fn run(seq: &SynthSequence, config: Config, frames: usize) -> (Odometry, Vec<FrameOutput>) {
-    let mut odo = Odometry::new(config).unwrap();
-    let outs = (0..frames)
-        .map(|i| {
-            let f = seq.frame(i);
-            odo.push(FrameView {
-                timestamp: f.timestamp,
-                intensity: &f.intensity,
-                depth: &f.depth,
-            })
-            .unwrap()
-        })
-        .collect();
-    (odo, outs)
-}
-
-/// RMSE (m) of the translations relative to the first frame against the ground truth.
-fn drift_rmse(seq: &SynthSequence, outs: &[FrameOutput]) -> f64 {
-    let p0 = seq.pose(0);
-    let se: f64 = outs
-        .iter()
-        .map(|o| {
-            ((p0.inverse() * seq.pose(o.index as usize))
-                .translation
-                .vector
-                - o.pose.translation.vector)
-                .norm_squared()
-        })
-        .sum();
-    (se / outs.len() as f64).sqrt()
-}
 
 fn keyframe_config(seq: &SynthSequence) -> Config {
     let mut c = config(seq, Mode::L2);

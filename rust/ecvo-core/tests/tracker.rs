@@ -39,49 +39,12 @@ fn comp_follows_section_3_2() {
     assert!(!comp(&Pose::identity(), &zero));
 }
 
-fn run(
-    seq: &ecvo_synth::SynthSequence,
-    mode: Mode,
-    frames: usize,
-) -> (Odometry, Vec<ecvo_core::FrameOutput>) {
-    let mut odo = Odometry::new(config(seq, mode)).unwrap();
-    let outs = (0..frames)
-        .map(|i| {
-            let f = seq.frame(i);
-            odo.push(FrameView {
-                timestamp: f.timestamp,
-                intensity: &f.intensity,
-                depth: &f.depth,
-            })
-            .unwrap()
-        })
-        .collect();
-    (odo, outs)
-}
-
-/// RMSE of translation differences of the poses relative to the first frame
-/// (both trajectories start at the first camera, so no alignment is needed).
-fn drift_rmse(seq: &ecvo_synth::SynthSequence, outs: &[ecvo_core::FrameOutput]) -> f64 {
-    let p0 = seq.pose(0);
-    let se: f64 = outs
-        .iter()
-        .map(|o| {
-            ((p0.inverse() * seq.pose(o.index as usize))
-                .translation
-                .vector
-                - o.pose.translation.vector)
-                .norm_squared()
-        })
-        .sum();
-    (se / outs.len() as f64).sqrt()
-}
-
 #[test]
 fn counters_obey_the_identity_and_l2_tracks() {
     let seq = sequence(DepthNoise::phone_like(), 21);
     let frames = 90;
     for mode in [Mode::Naive, Mode::L1, Mode::L2] {
-        let (odo, outs) = run(&seq, mode, frames);
+        let (odo, outs) = run(&seq, config(&seq, mode), frames);
         let c = odo.tracker().counters();
         assert_eq!(c.frames, frames as u64);
         assert_eq!(c.lost_frames, 0, "{mode:?}");
@@ -121,7 +84,7 @@ fn counters_obey_the_identity_and_l2_tracks() {
 #[test]
 fn memory_is_bounded_by_the_levels() {
     let seq = sequence(DepthNoise::phone_like(), 4);
-    let (odo, _) = run(&seq, Mode::L2, 60);
+    let (odo, _) = run(&seq, config(&seq, Mode::L2), 60);
     // Previous frame, one per level, and the frame being prepared.
     assert!(
         odo.frames_allocated() <= 2 + 2,
@@ -337,7 +300,7 @@ fn refused_corrections_do_not_promote_and_are_counted() {
         "{c:?}"
     );
     // With the default gate the same stream's corrections are accepted.
-    let (odo, _) = run(&seq, Mode::L1, 90);
+    let (odo, _) = run(&seq, config(&seq, Mode::L1), 90);
     let c = odo.tracker().counters();
     assert!(
         c.references[0] > 0 && c.rejected_corrections * 10 <= c.references[0],

@@ -1,7 +1,9 @@
 //! Synthetic frames for the engine's tests, rendered by ecvo-synth.
 #![allow(dead_code)]
 
-use ecvo_core::{Camera, Config, FrameView, Mode, Pose, PreparedFrame, Preparer, Preset};
+use ecvo_core::{
+    Camera, Config, FrameOutput, FrameView, Mode, Odometry, Pose, PreparedFrame, Preparer, Preset,
+};
 use ecvo_synth::{DepthNoise, SynthCamera, SynthSequence};
 
 /// A 320x180 phone-like sequence with a fine depth unit (0.2 mm) and the given noise.
@@ -62,4 +64,38 @@ pub fn pose_error(a: &Pose, b: &Pose) -> (f64, f64) {
         d.translation.vector.norm(),
         ecvo_core::se3::angle(&d).to_degrees(),
     )
+}
+
+/// Tracks the first `frames` frames of `seq` with `config`, one `Odometry::push` each.
+pub fn run(seq: &SynthSequence, config: Config, frames: usize) -> (Odometry, Vec<FrameOutput>) {
+    let mut odo = Odometry::new(config).unwrap();
+    let outs = (0..frames)
+        .map(|i| {
+            let f = seq.frame(i);
+            odo.push(FrameView {
+                timestamp: f.timestamp,
+                intensity: &f.intensity,
+                depth: &f.depth,
+            })
+            .unwrap()
+        })
+        .collect();
+    (odo, outs)
+}
+
+/// RMSE (m) of the translations relative to the first frame against the ground truth
+/// (both trajectories start at the first camera, so no alignment is needed).
+pub fn drift_rmse(seq: &SynthSequence, outs: &[FrameOutput]) -> f64 {
+    let p0 = seq.pose(0);
+    let se: f64 = outs
+        .iter()
+        .map(|o| {
+            ((p0.inverse() * seq.pose(o.index as usize))
+                .translation
+                .vector
+                - o.pose.translation.vector)
+                .norm_squared()
+        })
+        .sum();
+    (se / outs.len() as f64).sqrt()
 }
