@@ -11,6 +11,7 @@
 #![allow(rustdoc::broken_intra_doc_links)]
 
 mod engine;
+mod outputs;
 mod plot;
 mod run;
 mod settings;
