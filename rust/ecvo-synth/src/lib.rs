@@ -25,6 +25,7 @@ mod render;
 pub mod rng;
 mod scene;
 mod sequence;
+mod texture;
 
 pub use camera::SynthCamera;
 pub use noise::{
@@ -34,7 +35,8 @@ pub use noise::{
 pub use orbit::{ORBIT_DEPTH_RANGE_M, ORBIT_RADIUS_M, hall_apothem};
 pub use path::{CameraPath, FAST_PERIOD_S, Harmonic, look_at};
 pub use render::{NO_SURFACE, Rendered, render, render_supersampled};
-pub use scene::{Hit, ROOM_SURFACES, RayOrigin, Scene, SceneBox, Texture};
+pub use scene::{Hit, ROOM_SURFACES, RayOrigin, Scene, SceneBox};
 pub use sequence::{
     FAST_MAX_ANGULAR_SPEED, FAST_MAX_LINEAR_SPEED, FAST_WALL_SURFACE, SynthFrame, SynthSequence,
 };
+pub use texture::Texture;
