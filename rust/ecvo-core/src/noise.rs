@@ -10,8 +10,13 @@
 //!
 //! So the shape is measured. Every \[A\] the tracker believes reports, per depth bin,
 //! a robust spread of its raw depth residuals `D_i(u') − [Tq]_z` at the finest step
-//! ([`DepthSpread`]: 1.4826 × the median absolute residual, from a fixed histogram);
-//! [`NoiseFit`] keeps decayed sums of those spreads over the last frames and fits
+//! ([`DepthSpread`]: 1.4826 × the median absolute residual, from a fixed histogram).
+//! A registration's residuals are the sensor's noise plus its own misregistration,
+//! which is about the same at every depth and changes from frame to frame; so
+//! [`NoiseFit`] takes, per depth bin, the smallest spread of each window of
+//! [`REFIT_EVERY`] frames (the lower envelope: the spread of the frame registered
+//! best at that depth, whose misregistration part is smallest), keeps decayed sums
+//! of those minima over the last windows and fits
 //! `σ_Z(z)² = a + b·z⁴` (relative least squares over the bins, `a, b ≥ 0`). Only the
 //! ratio `α = a / b` shapes the weights (the bivariate fit scales them as a whole):
 //! the residual's gain becomes `λ·√((α + 1) / (α + z⁴))`, which is `λ / z²` for `α = 0`
@@ -41,7 +46,8 @@ pub const R_MIN: f32 = 1.0 / 131_072.0;
 pub const MIN_BIN_RESIDUALS: u32 = 16;
 /// Every how many believed frames the shape is refitted.
 pub const REFIT_EVERY: u32 = 8;
-/// The weight of the past at each new frame's spreads (about 30 frames of memory).
+/// The weight of the past per frame (about 30 frames of memory); a window's minima
+/// enter with the past weighed by `DECAY^REFIT_EVERY`.
 pub const DECAY: f64 = 0.97;
 /// The fitted `2 log2 α` must leave the model in use by this many grid steps (a
 /// factor of 2.8 in α) for the model to change.
@@ -184,6 +190,10 @@ pub struct NoiseFit {
     model: DepthNoiseModel,
     /// The last fit's `(a, b)`, if any.
     last: Option<(f64, f64)>,
+    /// Per bin, the smallest `σ²` recorded since the last refit (∞ when none).
+    window_min: [f64; DEPTH_BINS],
+    /// Per bin, the residuals counted since the last refit.
+    window_count: [f64; DEPTH_BINS],
 }
 
 /// Fewest (decayed) residuals a bin needs to enter the fit.
@@ -201,6 +211,8 @@ impl NoiseFit {
                 m => m,
             },
             last: None,
+            window_min: [f64::INFINITY; DEPTH_BINS],
+            window_count: [0.0; DEPTH_BINS],
         }
     }
 
@@ -214,23 +226,34 @@ impl NoiseFit {
         self.last
     }
 
-    /// Adds one believed registration's spreads; every [`REFIT_EVERY`] calls the shape
-    /// is refitted. Returns the model when it changed.
+    /// Adds one believed registration's spreads; every [`REFIT_EVERY`] calls the
+    /// window's per-bin minima join the decayed sums and the shape is refitted.
+    /// Returns the model when it changed.
     pub fn record(&mut self, s: &DepthSpread) -> Option<DepthNoiseModel> {
         if s.is_empty() {
             return None;
         }
         for b in 0..DEPTH_BINS {
-            let n = s.count[b] as f64;
-            let sg = s.sigma[b] as f64;
-            self.weight[b] = DECAY * self.weight[b] + n;
-            self.power[b] = DECAY * self.power[b] + n * sg * sg;
+            if s.count[b] > 0 {
+                let sg = s.sigma[b] as f64;
+                self.window_count[b] += s.count[b] as f64;
+                self.window_min[b] = self.window_min[b].min(sg * sg);
+            }
         }
         self.since += 1;
         if self.since < REFIT_EVERY {
             return None;
         }
         self.since = 0;
+        let d = DECAY.powi(REFIT_EVERY as i32);
+        for b in 0..DEPTH_BINS {
+            let n = self.window_count[b];
+            let y = if n > 0.0 { self.window_min[b] } else { 0.0 };
+            self.weight[b] = d * self.weight[b] + n;
+            self.power[b] = d * self.power[b] + n * y;
+            self.window_count[b] = 0.0;
+            self.window_min[b] = f64::INFINITY;
+        }
         let (a, b) = self.fit()?;
         self.last = Some((a, b));
         let new = model_of(a, b);

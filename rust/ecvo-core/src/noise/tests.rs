@@ -127,9 +127,17 @@ fn the_fit_recovers_known_noise_including_none() {
         m => panic!("{m:?}"),
     }
 
-    // A constant 3 mm.
+    // A constant 3 mm: constant, or a mixed model within 6 % of it up to 4 m. The
+    // window minimum reads bins with few residuals (here the near ones) slightly
+    // lower, which leaves a trace of a z⁴ term.
     let f = fit(0.003f64.powi(2), 0.0, 24);
-    assert_eq!(f.model(), DepthNoiseModel::Constant);
+    assert!(
+        matches!(f.model(), DepthNoiseModel::Constant)
+            || matches!(f.model(), DepthNoiseModel::Mixed { half_log2_alpha } if half_log2_alpha >= 22),
+        "{:?} {:?}",
+        f.model(),
+        f.coefficients()
+    );
 }
 
 #[test]
@@ -173,4 +181,40 @@ fn models_map_to_the_grid() {
     );
     assert_eq!(model_of(1e-6, 1.0), DepthNoiseModel::Quadratic);
     assert_eq!(model_of(1e6, 1.0), DepthNoiseModel::Constant);
+}
+
+/// Misregistration adds a depth-independent spread that differs from frame to frame
+/// (here up to 4 mm on a Kinect's `1.4 mm·z²`, about α = 2.7 on average). The fit
+/// takes each window's best-registered frame per bin, so it stays close to the
+/// sensor's z² shape instead of reading the average misregistration as a floor.
+#[test]
+fn misregistration_varying_by_frame_does_not_read_as_a_noise_floor() {
+    let kb = 0.0014f64.powi(2);
+    let mut rng = Normal(21);
+    let mut f = NoiseFit::new(DepthNoiseModel::Fitted);
+    let mut mean_a = 0.0;
+    let frames = 48;
+    for k in 0..frames {
+        let a = (0.004 * rng.uniform()).powi(2);
+        mean_a += a / frames as f64;
+        f.record(&registration(a, kb, 6000, 100 + k));
+    }
+    assert!(
+        mean_a / kb > 2.0,
+        "the average misregistration is a floor: {mean_a}"
+    );
+    let (a, b) = f.coefficients().expect("fitted");
+    assert!(
+        a / b < 0.25 * mean_a / kb,
+        "α {} against {}",
+        a / b,
+        mean_a / kb
+    );
+    assert!((b / kb - 1.0).abs() < 0.3, "b {b} against {kb}");
+    assert!(
+        matches!(f.model(), DepthNoiseModel::Quadratic)
+            || matches!(f.model(), DepthNoiseModel::Mixed { half_log2_alpha } if half_log2_alpha <= -2),
+        "{:?}",
+        f.model()
+    );
 }
