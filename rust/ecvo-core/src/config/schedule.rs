@@ -96,7 +96,7 @@ impl Schedule {
     /// of every second pixel of the full one. On the 640x480 Kinect streams of the
     /// suite that is the same drift per second as the full-resolution step (real
     /// 1.01 translation / 0.97 rotation, synthetic 0.96 / 1.02) in about 0.7 of the
-    /// time: the lookups run on an image four times smaller (`docs/profile.md`).
+    /// time: the lookups run on an image four times smaller (`docs/profile-passes.md`).
     ///
     /// On an image too small for a step's level (fewer than [`MIN_LEVEL_SIDE`] pixels
     /// on a side there), the step runs on the deepest level the image has

@@ -14,7 +14,7 @@
 //! `ECVO_NO_AVX2=1` against the default on the same machine, the AVX2 copies of the
 //! bilateral filter and the normals make the whole preparation about 1.5x faster;
 //! `ECVO_NO_AVX512=1` against the default on an AVX-512 CPU (AMD EPYC, Zen 4), the
-//! AVX-512 copies make `prepare/320x180` about 1.5x faster again (`docs/profile.md`).
+//! AVX-512 copies make `prepare/320x180` about 1.5x faster again (`docs/profile-passes.md`).
 
 /// The widest copies this CPU may run: 0 the baseline, 1 AVX2 (the CPU has it and
 /// `ECVO_NO_AVX2` is unset), 2 AVX-512 (also F, VL, BW and DQ, and `ECVO_NO_AVX512`
