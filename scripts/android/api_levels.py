@@ -43,7 +43,7 @@ import sys
 import zipfile
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "android-stubs"))
-import gen_stubs  # noqa: E402  (the .d.ts parser, with @since)
+from dts import parse as parse_dts  # noqa: E402  (the .d.ts parser, with @since)
 
 NEWEST = 37
 FLOOR = 23  # everything in the API 23 jar is taken as available at minSdk (>= 23)
@@ -154,7 +154,7 @@ class Platform:
     def __init__(self, dts, jar):
         self.jar = read_jar(jar)
         self.dts = {}
-        for fqn, c in gen_stubs.parse(dts).items():
+        for fqn, c in parse_dts(dts).items():
             self.dts[fqn] = c
 
     @staticmethod
