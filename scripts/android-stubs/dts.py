@@ -12,6 +12,7 @@ the app's API levels with the `since` fields.
 import re
 from dataclasses import dataclass, field
 
+
 @dataclass
 class Member:
     kind: str  # "field", "method", "ctor"

@@ -1,5 +1,6 @@
-"""Tests of gen_stubs.py on a small declarations file shaped like @nativescript/types-android's:
-the Java it writes, and that javac compiles it (when javac is installed)."""
+"""Tests of gen_stubs.py and its parser dts.py on a small declarations file shaped like
+@nativescript/types-android's: the Java it writes, and that javac compiles it (when javac is
+installed)."""
 
 import os
 import shutil
@@ -9,6 +10,7 @@ import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import dts  # noqa: E402
 import gen_stubs  # noqa: E402
 
 DTS = '''/// <reference path="android-declarations.d.ts"/>
@@ -124,7 +126,7 @@ class GenStubsTest(unittest.TestCase):
             return f.read()
 
     def test_parses_kinds(self):
-        c = gen_stubs.parse(self.dts)
+        c = dts.parse(self.dts)
         self.assertTrue(c["android.demo.Widget.Listener"].interface)
         self.assertFalse(c["android.demo.Widget"].interface)
         self.assertTrue(c["android.demo.Widget.Style"].enum)
