@@ -105,6 +105,15 @@ pub(crate) fn normals_and_seeds(
         });
 }
 
+/// What [`normals_and_seeds`] writes when neither filter is on and no normals are
+/// kept: no pixel dropped, no seed, for `n` pixels.
+pub(crate) fn no_drops(n: usize, normal_drop: &mut Vec<u8>, seed: &mut Vec<u8>) {
+    for v in [normal_drop, seed] {
+        v.clear();
+        v.resize(n, 0);
+    }
+}
+
 multiversion! {
     /// One interior row of [`normals_and_seeds`].
     fn row(
