@@ -366,23 +366,16 @@ impl Preparer {
                 .contour_angle_deg
                 .map(|a| (a.to_radians().sin()) as f32),
         };
-        if angles.cos_n.is_none() && angles.sin_g.is_none() && !self.keep_normals {
-            // Neither removal filter is on and nothing reads the normals: the pass
-            // would compute two normals a pixel to write zeros.
-            out.normals.clear();
-            removal::no_drops(w * h, &mut self.normal_drop, &mut self.contour_seed);
-        } else {
-            removal::normals_and_seeds(
-                &self.smoothed,
-                &self.ray_x,
-                &self.ray_y,
-                angles,
-                self.keep_normals,
-                &mut out.normals,
-                &mut self.normal_drop,
-                &mut self.contour_seed,
-            );
-        }
+        removal::normals_and_seeds(
+            &self.smoothed,
+            &self.ray_x,
+            &self.ray_y,
+            angles,
+            self.keep_normals,
+            &mut out.normals,
+            &mut self.normal_drop,
+            &mut self.contour_seed,
+        );
         self.planes
             .resize_with(self.pyramid_depth + 1, pyramid::Planes::default);
         let counts = removal::apply_masks(

@@ -57,8 +57,14 @@ pub(crate) fn normals_and_seeds(
     normal_drop.resize(n, 0);
     seed.resize(n, 0);
     if !keep_normals {
-        // The same tests, without the averaged normal or its store.
         normals.clear();
+        if angles.cos_n.is_none() && angles.sin_g.is_none() {
+            // Neither test is on and no normal is kept: nothing to compute.
+            normal_drop.fill(0);
+            seed.fill(0);
+            return;
+        }
+        // The same tests, without the averaged normal or its store.
         normal_drop
             .par_chunks_mut(w)
             .zip(seed.par_chunks_mut(w))
@@ -103,15 +109,6 @@ pub(crate) fn normals_and_seeds(
             let ry = [ray_y[y - 1], ray_y[y], ray_y[y + 1]];
             row(rows, ray_x, ry, angles, normals, drop, seed);
         });
-}
-
-/// What [`normals_and_seeds`] writes when neither filter is on and no normals are
-/// kept: no pixel dropped, no seed, for `n` pixels.
-pub(crate) fn no_drops(n: usize, normal_drop: &mut Vec<u8>, seed: &mut Vec<u8>) {
-    for v in [normal_drop, seed] {
-        v.clear();
-        v.resize(n, 0);
-    }
 }
 
 multiversion! {
