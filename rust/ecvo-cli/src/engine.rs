@@ -280,7 +280,7 @@ pub fn track_sequence(
     let mut c = Collector {
         cloud: opts.cloud,
         cloud_stride: opts.cloud_stride,
-        preparer: (opts.cloud != CloudFrames::None).then(|| Preparer::new(config)),
+        preparer: (opts.cloud != CloudFrames::None).then(|| Preparer::whole(config)),
         scratch: PreparedFrame::default(),
         pending: VecDeque::new(),
         outputs: Vec::with_capacity(n),

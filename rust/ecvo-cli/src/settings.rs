@@ -79,6 +79,8 @@ pub struct EngineChoice {
     pub keyframe_min_overlap: Option<f64>,
     /// Spread growth above which a keyframe registration is refused.
     pub keyframe_max_spread_growth: Option<f64>,
+    /// The depth of a frame's lookup levels under keyframe tracking.
+    pub lookup_depth: Option<ecvo_core::LookupDepth>,
 }
 
 impl EngineChoice {
@@ -255,6 +257,9 @@ impl TrackSettings {
         }
         if let Some(k) = e.keyframes {
             config.keyframes = k;
+        }
+        if let Some(d) = e.lookup_depth {
+            config.lookup_depth = d;
         }
         if let Some(f) = e.keyframe_min_overlap {
             config.keyframe_min_overlap = f;

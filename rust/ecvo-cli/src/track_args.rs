@@ -104,6 +104,12 @@ pub(crate) struct TrackArgs {
     /// frame registers against the previous frame and becomes the keyframe; inf: off).
     #[arg(long)]
     pub(crate) keyframe_spread: Option<f64>,
+    /// With --tracking keyframe: the depth of a frame's lookup levels (what the warp
+    /// samples): filtered (every frame gets the whole preparation), raw or bilateral
+    /// (the bilateral filter alone); with raw and bilateral a frame's reference side
+    /// (removal filters, templates) is finished only when it is registered against.
+    #[arg(long, value_enum)]
+    pub(crate) lookup_depth: Option<LookupDepthArg>,
     /// Make any skipped frame an error: a list entry without a partner within
     /// 0.02 s, a frame identical to the previous one, a timestamp not after the
     /// previous one (by default each is a warning, counted in the frame account).
@@ -150,6 +156,13 @@ fn parse_bytes(text: &str) -> std::result::Result<usize, String> {
 pub(crate) enum TrackingArg {
     Chain,
     Keyframe,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum LookupDepthArg {
+    Filtered,
+    Raw,
+    Bilateral,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -224,6 +237,11 @@ impl TrackArgs {
             keyframes: self.tracking.map(|t| matches!(t, TrackingArg::Keyframe)),
             keyframe_min_overlap: self.keyframe_overlap,
             keyframe_max_spread_growth: self.keyframe_spread,
+            lookup_depth: self.lookup_depth.map(|d| match d {
+                LookupDepthArg::Filtered => ecvo_core::LookupDepth::Filtered,
+                LookupDepthArg::Raw => ecvo_core::LookupDepth::Raw,
+                LookupDepthArg::Bilateral => ecvo_core::LookupDepth::Bilateral,
+            }),
         };
         TrackSettings {
             frame_step: self.frame_step as usize,

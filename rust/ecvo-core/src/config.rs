@@ -158,6 +158,20 @@ pub enum DepthNoiseModel {
     Fitted,
 }
 
+/// The depth of a frame's lookup levels under keyframe tracking
+/// ([`Config::lookup_depth`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LookupDepth {
+    /// The whole preparation for every frame: bilateral filter, normal and contour
+    /// removal, the templates.
+    #[default]
+    Filtered,
+    /// The sensor's depth as it is (in range, in metres), averaged down the pyramid.
+    Raw,
+    /// The bilateral filter alone, without the removal filters.
+    Bilateral,
+}
+
 /// What to start \[A\], the frame-to-frame `MOTION`, from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MotionPrior {
@@ -340,6 +354,15 @@ pub struct Config {
     /// vary by more than that from frame to frame, and lost more on the suite than it
     /// saved (issue 26's closing note).
     pub keyframe_max_spread_growth: f64,
+    /// With [`Config::keyframes`]: the depth a frame's lookup levels (what `MOTION`
+    /// samples when the frame is the current one) are made from. With
+    /// [`LookupDepth::Filtered`] every frame gets the whole preparation, as in the
+    /// chain; otherwise a frame is prepared only as far as the warp samples it, and
+    /// its reference side (the filters, the removal masks, the templates) is
+    /// finished once, by the tracker, when the frame is first registered against
+    /// (a keyframe, or the previous frame of a fall-back or a fusion). Ignored
+    /// without keyframe tracking.
+    pub lookup_depth: LookupDepth,
     /// A frame becomes an anchor after a loss only with at least this fraction of
     /// its pixels carrying depth after filtering.
     pub min_anchor_depth_fraction: f64,
@@ -420,6 +443,7 @@ impl Config {
             keyframes: false,
             keyframe_min_overlap: 0.5,
             keyframe_max_spread_growth: f64::INFINITY,
+            lookup_depth: LookupDepth::Filtered,
             min_anchor_depth_fraction: 0.05,
             min_anchor_texture_fraction: 0.02,
             memory_budget: crate::memory::DEFAULT_MEMORY_BUDGET,

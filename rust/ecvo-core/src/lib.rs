@@ -32,9 +32,9 @@ pub mod tracker;
 
 pub use camera::{Camera, FrameView};
 pub use config::{
-    Config, DepthNoiseModel, FilterConfig, MAX_PYRAMID_LEVEL, MAX_SCHEDULE_SHIFT, MIN_LEVEL_SIDE,
-    Mode, MotionConfig, MotionLevel, MotionPrior, Preset, ReferenceLevel, SCHEDULE_SHIFT_SIDE,
-    Schedule, Weighting, parse_point_budget, parse_schedule,
+    Config, DepthNoiseModel, FilterConfig, LookupDepth, MAX_PYRAMID_LEVEL, MAX_SCHEDULE_SHIFT,
+    MIN_LEVEL_SIDE, Mode, MotionConfig, MotionLevel, MotionPrior, Preset, ReferenceLevel,
+    SCHEDULE_SHIFT_SIDE, Schedule, Weighting, parse_point_budget, parse_schedule,
 };
 pub use error::{Error, Result};
 pub use memory::{DEFAULT_MEMORY_BUDGET, MemoryEstimate};

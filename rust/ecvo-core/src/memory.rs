@@ -134,10 +134,11 @@ pub fn prepared_frame_bytes(config: &Config) -> usize {
         .iter()
         .map(|l| template_capacity(config, l.pyramid_level, l.stride) * size_of::<[f32; 4]>())
         .sum();
-    samples + normals + templates
+    samples + normals + templates + crate::prepare::side_bytes(config)
 }
 
-/// The preparer's scratch: padded and smoothed depth (4 bytes a pixel each), the two
+/// The preparers' scratch (the filter's, and with lookup frames the tracker's
+/// finisher's): padded and smoothed depth (4 bytes a pixel each), the two
 /// per-pixel masks, the rays, the intensity and depth planes of every level (8 bytes
 /// a pixel) and, with a point budget, the selection's candidates (counted at twice
 /// their number: they grow by `push`).
@@ -163,7 +164,29 @@ pub fn preparer_bytes(config: &Config) -> usize {
         })
         .max()
         .unwrap_or(0);
-    padded + smoothed + masks + rays + spatial + planes + selector
+    let scratch = padded + smoothed + masks + rays + spatial + planes + selector;
+    scratch + finisher_bytes(config, scratch)
+}
+
+/// With frames prepared for lookup only ([`Config::lookup_depth`]), the tracker's
+/// finisher: a second preparer's `scratch`, and the samples of each level a step
+/// with a point budget selects from (32 bytes a pixel).
+fn finisher_bytes(config: &Config, scratch: usize) -> usize {
+    if crate::prepare::lookup_depth(config).is_none() {
+        return 0;
+    }
+    let budgeted: usize = level_sizes(config)
+        .enumerate()
+        .filter(|(l, _)| {
+            config
+                .motion
+                .levels
+                .iter()
+                .any(|s| s.pyramid_level == *l && s.max_points.is_some())
+        })
+        .map(|(_, (w, h))| w * h * size_of::<Sample>())
+        .sum();
+    scratch + budgeted
 }
 
 /// One motion estimator's scratch for the largest template of `config`'s schedule

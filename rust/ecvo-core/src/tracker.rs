@@ -23,7 +23,7 @@ use crate::error::Result;
 use crate::motion::{MotionEstimator, MotionResult};
 use crate::noise::NoiseFit;
 pub use crate::odometry::{Odometry, frame_to_frame, working_motion};
-use crate::prepare::PreparedFrame;
+use crate::prepare::{PreparedFrame, Preparer};
 pub use crate::prior::{Velocity, predict};
 use crate::se3;
 use crate::spread::SpreadWatch;
@@ -167,6 +167,18 @@ pub struct Tracker<F> {
     /// With keyframe tracking: the covariance of the previous frame's pose relative
     /// to the keyframe (zero when it is the keyframe; `None` when unknown).
     keyframe_chain: Option<Matrix6<f64>>,
+    /// With frames prepared for lookup only ([`Config::lookup_depth`]): finishes the
+    /// reference side of a frame before it is first registered against.
+    finisher: Option<Preparer>,
+}
+
+/// Makes `frame` ready to be registered against: finishes its reference side when it
+/// was prepared for lookup only (once; a no-op otherwise).
+fn ready(finisher: &mut Option<Preparer>, frame: &PreparedFrame) {
+    if let Some(p) = finisher {
+        p.finish(frame);
+    }
+    debug_assert!(frame.is_reference_ready(), "a reference frame is finished");
 }
 
 impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
@@ -196,8 +208,17 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             },
             noise: NoiseFit::new(config.motion.depth_noise),
             keyframe_chain: None,
+            finisher: crate::prepare::lookup_depth(&config).map(|_| Preparer::whole(&config)),
             config,
         })
+    }
+
+    /// Whether the frames this tracker finishes get their normals (the point cloud
+    /// reads them; [`Preparer::set_normals`]).
+    pub fn set_normals(&mut self, on: bool) {
+        if let Some(p) = &mut self.finisher {
+            p.set_normals(on);
+        }
     }
 
     /// The configuration in use.
@@ -317,13 +338,16 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             Some(k) => self.register_keyframe(&frame, k, &prev, prior.as_ref()),
             None => match ahead(&prev.frame, prior.as_ref(), self.motion.depth_noise) {
                 Some(r) => r,
-                None => frame_to_frame(
-                    &mut self.estimator,
-                    &frame,
-                    &prev.frame,
-                    prior.as_ref(),
-                    &self.motion,
-                ),
+                None => {
+                    ready(&mut self.finisher, &prev.frame);
+                    frame_to_frame(
+                        &mut self.estimator,
+                        &frame,
+                        &prev.frame,
+                        prior.as_ref(),
+                        &self.motion,
+                    )
+                }
             },
         };
         out.motion_estimations += 1;
@@ -473,6 +497,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
                 became = k + 1;
                 continue;
             }
+            ready(&mut self.finisher, &reference.frame);
             let r = self
                 .estimator
                 .motion(&frame, &reference.frame, &accumulated, &self.correcting);
@@ -501,6 +526,11 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         }
         for c in &mut self.chain[..became] {
             *c = Some(Matrix6::zeros());
+        }
+        if became > 0 {
+            // A new reference is finished now, before the next frame and before the
+            // point cloud read it.
+            ready(&mut self.finisher, &frame);
         }
         for (r, refused) in self.refs[..became].iter_mut().zip(&mut self.refused) {
             *r = Some(Kept {
@@ -539,6 +569,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         if comp(&accumulated, level) {
             return;
         }
+        ready(&mut self.finisher, &reference.frame);
         let r = self
             .estimator
             .motion(frame, &reference.frame, &accumulated, &self.correcting);

@@ -205,10 +205,12 @@ impl Pipeline {
             Pipeline::memory_needed(&config, &options),
             config.memory_budget,
         )?;
-        let tracker: Tracker<PooledFrame> = Tracker::new(config.clone())?;
+        let mut tracker: Tracker<PooledFrame> = Tracker::new(config.clone())?;
         let mut preparer = Preparer::new(&config);
-        // Only the geometry stage reads the normals.
+        // Only the geometry stage reads the normals (of frames prepared whole, or of
+        // reference sides the tracker finishes).
         preparer.set_normals(options.geometry.is_some());
+        tracker.set_normals(options.geometry.is_some());
         let levels = config.reference_levels.len();
         let q = options.queue_capacity;
         let pool_capacity = frame_pool_capacity(&config, &options);

@@ -145,9 +145,9 @@ pub(super) fn motion_from<K: Loops>(
     // the spread check then refits the configured form on its residuals.
     let fine = cfg.fine_weighting.filter(|w| *w != p.weighting);
     let mut fine_level: Option<&ImageLevel> = None;
+    let templates = fj.templates();
     for (k, step) in cfg.levels.iter().enumerate().take(MAX_STEPS) {
-        let (Some(level), Some(template)) =
-            (fi.levels.get(step.pyramid_level), fj.templates.get(k))
+        let (Some(level), Some(template)) = (fi.levels.get(step.pyramid_level), templates.get(k))
         else {
             break;
         };

@@ -37,7 +37,7 @@
 //! bit on every path.
 
 use crate::camera::{Camera, FrameView};
-use crate::config::{Config, FilterConfig, MotionLevel};
+use crate::config::{Config, FilterConfig, LookupDepth, MotionLevel};
 use crate::error::Result;
 
 use rayon::prelude::*;
@@ -48,9 +48,13 @@ mod pyramid;
 mod reference;
 mod removal;
 mod select;
+mod side;
 pub(crate) mod simd;
 #[cfg(test)]
 mod tests;
+
+pub use side::{ReferenceSide, Templates};
+pub(crate) use side::{lookup_depth, side_bytes};
 
 /// Fewest pixels one rayon task of a row-parallel loop takes. Handing work to
 /// another thread costs tens of microseconds, so an image is only split when each
@@ -121,7 +125,9 @@ pub struct PreparedFrame {
     pub timestamp: f64,
     /// Image pyramid, full resolution first.
     pub levels: Vec<ImageLevel>,
-    /// Template points, one entry per step of the motion schedule.
+    /// Template points, one entry per step of the motion schedule, of a frame
+    /// prepared whole (empty for a frame prepared for lookup: read
+    /// [`Self::templates`]).
     pub templates: Vec<Template>,
     /// Unit normals of the full-resolution pixels (NaN where unknown), oriented
     /// towards the camera: the average of the axis and diagonal normals. Empty when
@@ -141,6 +147,14 @@ pub struct PreparedFrame {
     /// does not track level 0 (its samples are then not built): what
     /// [`Self::for_each_point`] reads instead.
     base: pyramid::Planes,
+    /// Prepared for lookup only ([`Config::lookup_depth`]): the templates, normals,
+    /// removal counts and filtered planes are in [`Self::reference_side`], finished
+    /// by [`Preparer::finish`]; `valid_depth` counts the lookup depth.
+    light: bool,
+    /// The raw planes of a frame prepared for lookup, to finish it from.
+    raw: side::RawPlanes,
+    /// The reference side of a frame prepared for lookup.
+    reference: side::ReferenceCell,
 }
 
 impl PreparedFrame {
@@ -171,16 +185,22 @@ impl PreparedFrame {
                 points: Vec::with_capacity(template_capacity(&cams[l.pyramid_level], l.stride)),
             })
             .collect();
-        PreparedFrame {
+        let light = side::lookup_depth(config).is_some();
+        let mut frame = PreparedFrame {
             levels,
-            templates,
-            normals: Vec::with_capacity(config.camera.pixels()),
+            normals: Vec::with_capacity(if light { 0 } else { config.camera.pixels() }),
             base: pyramid::Planes {
                 intensity: Vec::with_capacity(base_pixels),
                 depth: Vec::with_capacity(base_pixels),
             },
             ..PreparedFrame::default()
+        };
+        if light {
+            frame.reserve_side(config, templates);
+        } else {
+            frame.templates = templates;
         }
+        frame
     }
 
     /// Visits every `stride`-th valid full-resolution pixel as
@@ -193,17 +213,23 @@ impl PreparedFrame {
         let (w, h) = (cam.width, cam.height);
         let (fx, fy, cx, cy) = (cam.fx as f32, cam.fy as f32, cam.cx as f32, cam.cy as f32);
         let stride = stride.max(1);
+        // A frame prepared for lookup gives its reference side's filtered planes and
+        // normals once finished, its lookup planes before.
+        let side = self.reference_side().filter(|s| s.is_finished());
+        let (base, normals) = match &side {
+            Some(s) => (Some(&s.base), &s.normals),
+            None => (
+                (level.samples.is_empty()).then_some(&self.base),
+                &self.normals,
+            ),
+        };
         // Level 0's samples when it is tracked, else the planes kept in their stead:
         // the same intensity and depth.
-        let kept = !level.samples.is_empty();
-        let at = |i: usize| {
-            if kept {
-                (level.samples[i][D], level.samples[i][I])
-            } else {
-                (self.base.depth[i], self.base.intensity[i])
-            }
+        let at = |i: usize| match base {
+            None => (level.samples[i][D], level.samples[i][I]),
+            Some(b) => (b.depth[i], b.intensity[i]),
         };
-        if !kept && self.base.depth.len() != w * h {
+        if base.is_some_and(|b| b.depth.len() != w * h) {
             return;
         }
         for y in (0..h).step_by(stride) {
@@ -211,11 +237,7 @@ impl PreparedFrame {
                 let (z, intensity) = at(y * w + x);
                 if z.is_finite() {
                     let p = [(x as f32 - cx) / fx * z, (y as f32 - cy) / fy * z, z];
-                    let n = self
-                        .normals
-                        .get(y * w + x)
-                        .copied()
-                        .unwrap_or([f32::NAN; 3]);
+                    let n = normals.get(y * w + x).copied().unwrap_or([f32::NAN; 3]);
                     f(p, n, (intensity * 255.0).round().clamp(0.0, 255.0) as u8);
                 }
             }
@@ -256,6 +278,11 @@ pub struct Preparer {
     selector: select::Selector,
     /// Whether frames get their normals ([`Preparer::set_normals`]).
     keep_normals: bool,
+    /// Frames prepared for lookup only, with this depth ([`Config::lookup_depth`]).
+    lookup: Option<LookupDepth>,
+    /// Scratch levels of [`Preparer::finish`] (samples only for steps with a point
+    /// budget).
+    side_levels: Vec<ImageLevel>,
 }
 
 impl Preparer {
@@ -294,6 +321,18 @@ impl Preparer {
             planes: Vec::new(),
             selector: select::Selector::default(),
             keep_normals: true,
+            lookup: side::lookup_depth(config),
+            side_levels: Vec::new(),
+        }
+    }
+
+    /// A preparer that prepares every frame whole, whatever
+    /// [`Config::lookup_depth`] says (a point cloud's frames; the tracker's
+    /// [`Preparer::finish`]).
+    pub fn whole(config: &Config) -> Self {
+        Preparer {
+            lookup: None,
+            ..Preparer::new(config)
         }
     }
 
@@ -326,36 +365,37 @@ impl Preparer {
     }
 
     /// Prepares `view` into `out`, reusing `out`'s buffers. Fails only on a frame
-    /// whose sizes do not match the camera.
+    /// whose sizes do not match the camera. Under keyframe tracking with a
+    /// [`LookupDepth`] other than `Filtered`, the frame is prepared only as far as
+    /// the warp samples it (its lookup levels); its reference side is left to
+    /// [`Preparer::finish`].
     pub fn prepare_into(&mut self, view: FrameView<'_>, out: &mut PreparedFrame) -> Result<()> {
         view.validate(&self.camera)?;
-        let cam = self.camera;
-        let (w, h) = (cam.width, cam.height);
         out.timestamp = view.timestamp;
-
-        // Raw units to metres (out-of-range depth is missing), smoothed.
-        let range = bilateral::DepthRange {
-            scale: 1.0 / cam.depth_scale as f32,
-            lo: self.filter.min_depth_m as f32,
-            hi: self.filter.max_depth_m as f32,
-        };
-        self.smoothed.resize(w * h, f32::NAN);
-        match self.filter.bilateral {
-            Some(b) => {
-                bilateral::load_padded(view.depth, w, h, b.radius, range, &mut self.padded_depth);
-                bilateral::filter(
-                    &self.padded_depth,
-                    &self.spatial,
-                    w,
-                    b.radius,
-                    b.sigma_depth_rel,
-                    &mut self.smoothed,
-                );
-            }
-            None => bilateral::load_plain(view.depth, range, &mut self.smoothed),
+        if let Some(depth) = self.lookup {
+            self.prepare_lookup(view, depth, out);
+            return Ok(());
         }
+        out.light = false;
+        let counts = self.filtered_planes(view, &mut out.normals);
+        out.removed_by_normal = counts.by_normal;
+        out.removed_by_contour = counts.by_contour;
+        out.valid_depth = counts.valid;
+        self.lookup_levels(out);
+        self.build_templates(&out.levels, &mut out.templates);
+        Ok(())
+    }
 
-        // Normals, normal-based and contour-based removal.
+    /// Passes 1 to 4: raw depth to metres, the bilateral filter, normals, the removal
+    /// masks, applied into level 0's compact planes (`self.planes[0]`); `normals` is
+    /// filled when the preparer keeps them.
+    fn filtered_planes(
+        &mut self,
+        view: FrameView<'_>,
+        normals: &mut Vec<[f32; 3]>,
+    ) -> removal::Counts {
+        let (w, h) = (self.camera.width, self.camera.height);
+        self.smooth_depth(view.depth, self.filter.bilateral);
         let angles = removal::Angles {
             cos_n: self
                 .filter
@@ -372,31 +412,59 @@ impl Preparer {
             &self.ray_y,
             angles,
             self.keep_normals,
-            &mut out.normals,
+            normals,
             &mut self.normal_drop,
             &mut self.contour_seed,
         );
         self.planes
             .resize_with(self.pyramid_depth + 1, pyramid::Planes::default);
-        let counts = removal::apply_masks(
+        debug_assert_eq!(self.smoothed.len(), w * h);
+        removal::apply_masks(
             view.intensity,
             &self.smoothed,
             &self.normal_drop,
             &self.contour_seed,
             w,
             angles.cos_n.is_some(),
-            &mut out.normals,
+            normals,
             &mut self.planes[0],
             &mut self.mask_rows,
-        );
-        out.removed_by_normal = counts.by_normal;
-        out.removed_by_contour = counts.by_contour;
-        out.valid_depth = counts.valid;
+        )
+    }
 
-        // The pyramid, its samples and the templates.
+    /// Raw depth to metres (out-of-range depth is missing) into `self.smoothed`,
+    /// smoothed by the bilateral filter `b` when there is one.
+    fn smooth_depth(&mut self, depth: &[u16], b: Option<crate::config::BilateralConfig>) {
+        let (w, h) = (self.camera.width, self.camera.height);
+        let range = bilateral::DepthRange {
+            scale: 1.0 / self.camera.depth_scale as f32,
+            lo: self.filter.min_depth_m as f32,
+            hi: self.filter.max_depth_m as f32,
+        };
+        self.smoothed.resize(w * h, f32::NAN);
+        match b {
+            Some(b) => {
+                bilateral::load_padded(depth, w, h, b.radius, range, &mut self.padded_depth);
+                bilateral::filter(
+                    &self.padded_depth,
+                    &self.spatial,
+                    w,
+                    b.radius,
+                    b.sigma_depth_rel,
+                    &mut self.smoothed,
+                );
+            }
+            None => bilateral::load_plain(depth, range, &mut self.smoothed),
+        }
+    }
+
+    /// Pass 5: from level 0's planes, the pyramid's planes and the samples of every
+    /// tracked level, the texture count; level 0's planes go to `out.base` when level
+    /// 0 is not tracked.
+    fn lookup_levels(&mut self, out: &mut PreparedFrame) {
         out.levels
             .resize_with(self.pyramid_depth + 1, ImageLevel::default);
-        let mut level_cam = cam;
+        let mut level_cam = self.camera;
         for l in 0..=self.pyramid_depth {
             if l > 0 {
                 let (head, tail) = self.planes.split_at_mut(l);
@@ -430,22 +498,21 @@ impl Preparer {
             // frame's old buffers (reserved by `for_config`) for the next frame.
             std::mem::swap(&mut self.planes[0], &mut out.base);
         }
-        out.templates
-            .resize_with(self.schedule.len(), Template::default);
-        for (step, t) in self.schedule.iter().zip(&mut out.templates) {
+    }
+
+    /// Pass 6: the template of every schedule step from the planes (a step with a
+    /// point budget selects from `levels`' samples).
+    fn build_templates(&mut self, levels: &[ImageLevel], templates: &mut Vec<Template>) {
+        templates.resize_with(self.schedule.len(), Template::default);
+        for (step, t) in self.schedule.iter().zip(templates.iter_mut()) {
             let l = step.pyramid_level;
             match step.max_points {
-                None => build_template(&self.planes[l], out.levels[l].camera(), step.stride, t),
-                Some(budget) => build_selected_template(
-                    &out.levels[l],
-                    step.stride,
-                    budget,
-                    &mut self.selector,
-                    t,
-                ),
+                None => build_template(&self.planes[l], levels[l].camera(), step.stride, t),
+                Some(budget) => {
+                    build_selected_template(&levels[l], step.stride, budget, &mut self.selector, t)
+                }
             }
         }
-        Ok(())
     }
 }
 

@@ -11,7 +11,7 @@ use std::ops::Deref;
 
 use nalgebra::Matrix6;
 
-use super::{FrameOutput, Kept, Tracker, believable, comp, plausible_speed};
+use super::{FrameOutput, Kept, Tracker, believable, comp, plausible_speed, ready};
 use crate::Pose;
 use crate::correction::{chain_step, correction_distance, fuse_correction};
 use crate::motion::MotionResult;
@@ -49,6 +49,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         prev: &Kept<F>,
         prior: Option<&Pose>,
     ) -> MotionResult {
+        ready(&mut self.finisher, &keyframe.frame);
         let from_prev = se3::compose(&keyframe.pose.inverse(), &prev.pose);
         match prior {
             Some(p) => self.estimator.motion_from(
@@ -73,6 +74,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         dt: f64,
         out: &mut FrameOutput,
     ) -> Option<MotionResult> {
+        ready(&mut self.finisher, &prev.frame);
         let r = frame_to_frame(&mut self.estimator, frame, &prev.frame, prior, &self.motion);
         out.motion_estimations += 1;
         self.counters.motion_estimations += 1;
@@ -119,7 +121,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             _ => false,
         };
         let template = kf.map_or(0, |k| {
-            k.frame.templates.last().map_or(0, |t| t.points.len())
+            k.frame.templates().last().map_or(0, |t| t.points.len())
         });
         let thin = !fell_back
             && believed
@@ -137,6 +139,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             && self.config.fuse_corrections
             && let (Some(k), Some(cov)) = (keyframe, self.keyframe_chain)
         {
+            ready(&mut self.finisher, &prev.frame);
             let r = frame_to_frame(&mut self.estimator, frame, &prev.frame, prior, &self.motion);
             out.motion_estimations += 1;
             self.counters.motion_estimations += 1;

@@ -5,7 +5,7 @@ use std::ops::Deref;
 
 use nalgebra::Matrix6;
 
-use super::{FrameOutput, Kept, Tracker, TrackingState, believable};
+use super::{FrameOutput, Kept, Tracker, TrackingState, believable, ready};
 use crate::Pose;
 use crate::prepare::PreparedFrame;
 use crate::se3;
@@ -39,6 +39,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
                 continue;
             }
             let init = se3::compose(&reference.pose.inverse(), predicted);
+            ready(&mut self.finisher, &reference.frame);
             let r = self
                 .estimator
                 .motion(frame, &reference.frame, &init, &self.correcting);
@@ -97,6 +98,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
 
     /// Makes `frame` the previous frame and the reference at every level.
     pub(super) fn anchor(&mut self, frame: F, pose: Pose, index: u64) {
+        ready(&mut self.finisher, &frame);
         self.keyframe_chain = Some(Matrix6::zeros());
         for c in &mut self.chain {
             *c = Some(Matrix6::zeros());
