@@ -81,6 +81,8 @@ pub struct EngineChoice {
     pub keyframe_max_spread_growth: Option<f64>,
     /// The depth of a frame's lookup levels under keyframe tracking.
     pub lookup_depth: Option<ecvo_core::LookupDepth>,
+    /// Fuse every Nth frame after the keyframe with the chain (0: off).
+    pub keyframe_fuse_every: Option<u32>,
 }
 
 impl EngineChoice {
@@ -260,6 +262,9 @@ impl TrackSettings {
         }
         if let Some(d) = e.lookup_depth {
             config.lookup_depth = d;
+        }
+        if let Some(n) = e.keyframe_fuse_every {
+            config.keyframe_fuse_every = n;
         }
         if let Some(f) = e.keyframe_min_overlap {
             config.keyframe_min_overlap = f;

@@ -110,6 +110,11 @@ pub(crate) struct TrackArgs {
     /// (removal filters, templates) is finished only when it is registered against.
     #[arg(long, value_enum)]
     pub(crate) lookup_depth: Option<LookupDepthArg>,
+    /// With --tracking keyframe: every Nth frame after the keyframe, fuse its
+    /// registration with the chain through the previous frame, as a new keyframe's
+    /// always is (one more MOTION call; 0: off).
+    #[arg(long)]
+    pub(crate) keyframe_fuse_every: Option<u32>,
     /// Make any skipped frame an error: a list entry without a partner within
     /// 0.02 s, a frame identical to the previous one, a timestamp not after the
     /// previous one (by default each is a warning, counted in the frame account).
@@ -242,6 +247,7 @@ impl TrackArgs {
                 LookupDepthArg::Raw => ecvo_core::LookupDepth::Raw,
                 LookupDepthArg::Bilateral => ecvo_core::LookupDepth::Bilateral,
             }),
+            keyframe_fuse_every: self.keyframe_fuse_every,
         };
         TrackSettings {
             frame_step: self.frame_step as usize,

@@ -10,6 +10,15 @@ pub use schedule::{
     SCHEDULE_SHIFT_SIDE, Schedule, parse_point_budget, parse_schedule,
 };
 
+/// The default memory budget, 512 MiB: what an app on a phone with 3-4 GB can spend
+/// on tracking before the low-memory killer looks at it. With the default settings
+/// the sequential engine fits 4096x2160 in it, the default pipeline 1920x1080
+/// (`docs/reliability-jni.md` has the table).
+pub const DEFAULT_MEMORY_BUDGET: usize = 512 << 20;
+
+/// Most fixed-point passes of one scale fit.
+pub const MAX_SCALE_PASSES: usize = 20;
+
 /// Motion thresholds `(εd, εa)` of one error-correction level: `comp()` asks for a
 /// correction when the accumulated motion exceeds either (section 3.2).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -320,10 +329,14 @@ pub struct Config {
     /// is ([`crate::correction::fuse_correction`]), without making the frame a
     /// reference: while a reference lives long (slow motion), the chain's error is
     /// pulled back to it between corrections. Needs `fuse_corrections`; 0 switches it
-    /// off, as [`Config::paper`] does. With [`Config::keyframes`], every this many
-    /// frames after the keyframe the registration against it is fused with the chain
-    /// through the previous frame (one more `MOTION` call), as a new keyframe's is.
+    /// off, as [`Config::paper`] does. Chain tracking only (keyframe tracking has
+    /// [`Config::keyframe_fuse_every`]).
     pub refine_every: u32,
+    /// With [`Config::keyframes`]: every this many frames after the keyframe, the
+    /// registration against it is also fused with the chain through the previous
+    /// frame (one more `MOTION` call, and the previous frame's reference side
+    /// finished), as a new keyframe's always is. 0 switches it off.
+    pub keyframe_fuse_every: u32,
     /// Keyframe tracking (issue 26, as DVO-SLAM and visual-odometry-rs do): every
     /// frame is registered against the level-1 reference, the keyframe, instead of
     /// against the previous frame, seeded with the previous frame's pose and with the
@@ -440,13 +453,14 @@ impl Config {
             max_spread_jump: 5.0,
             fuse_corrections: true,
             refine_every: 3,
+            keyframe_fuse_every: 3,
             keyframes: false,
             keyframe_min_overlap: 0.5,
             keyframe_max_spread_growth: f64::INFINITY,
             lookup_depth: LookupDepth::Filtered,
             min_anchor_depth_fraction: 0.05,
             min_anchor_texture_fraction: 0.02,
-            memory_budget: crate::memory::DEFAULT_MEMORY_BUDGET,
+            memory_budget: DEFAULT_MEMORY_BUDGET,
         }
     }
 
@@ -460,7 +474,7 @@ impl Config {
         c.motion.scale_tolerance = 1e-3;
         c.motion.min_predicted_decrease = 0.0;
         c.motion.min_update_px = 0.0;
-        c.motion.scale_passes_per_update = crate::motion::MAX_SCALE_PASSES;
+        c.motion.scale_passes_per_update = MAX_SCALE_PASSES;
         c.motion.weighting = Weighting::Scalar;
         c.motion.depth_noise = DepthNoiseModel::Constant;
         c.motion.max_fine_depth_weight = f64::INFINITY;

@@ -16,8 +16,8 @@ pub enum Error {
     /// settings ([`crate::memory`]); nothing was allocated.
     #[error(
         "the image size and settings need {} of memory, over the budget of {} (a smaller image, fewer reference levels or a larger budget would do)",
-        crate::memory::format_mb(*need),
-        crate::memory::format_mb(*budget)
+        format_mb(*need),
+        format_mb(*budget)
     )]
     MemoryBudget {
         /// Bytes the engine would allocate.
@@ -32,3 +32,11 @@ pub enum Error {
 
 /// Result with the core's error.
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// Bytes per mebibyte, for messages.
+pub const MB: usize = 1 << 20;
+
+/// `bytes` in mebibytes with one decimal, for messages.
+pub fn format_mb(bytes: usize) -> String {
+    format!("{:.1} MB", bytes as f64 / MB as f64)
+}

@@ -17,14 +17,8 @@ use crate::config::Config;
 use crate::error::{Error, Result};
 use crate::prepare::Sample;
 
-/// The default memory budget, 512 MiB: what an app on a phone with 3-4 GB can spend
-/// on tracking before the low-memory killer looks at it. With the default settings
-/// the sequential engine fits 4096x2160 in it, the default pipeline 1920x1080
-/// (`docs/reliability-jni.md` has the table).
-pub const DEFAULT_MEMORY_BUDGET: usize = 512 << 20;
-
-/// Bytes per mebibyte, for messages.
-pub const MB: usize = 1 << 20;
+pub use crate::config::DEFAULT_MEMORY_BUDGET;
+pub use crate::error::{MB, format_mb};
 
 /// Fixed allowance for the small allocations whose size does not depend on the image
 /// (the tracker's per-level state, counters, the schedule, thread-local queues).
@@ -193,9 +187,4 @@ fn finisher_bytes(config: &Config, scratch: usize) -> usize {
 /// (`MotionEstimator::with_capacity`).
 pub fn estimator_bytes(config: &Config) -> usize {
     crate::motion::scratch_bytes(crate::prepare::max_template_points(config))
-}
-
-/// `bytes` in mebibytes with one decimal, for messages.
-pub fn format_mb(bytes: usize) -> String {
-    format!("{:.1} MB", bytes as f64 / MB as f64)
 }

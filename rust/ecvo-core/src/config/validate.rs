@@ -115,13 +115,13 @@ impl Config {
                 format!("{} is not in [0, 1)", m.min_predicted_decrease),
             );
         }
-        if !(1..=crate::motion::MAX_SCALE_PASSES).contains(&m.scale_passes_per_update) {
+        if !(1..=crate::config::MAX_SCALE_PASSES).contains(&m.scale_passes_per_update) {
             return bad(
                 "motion.scale_passes_per_update",
                 format!(
                     "{} is not in 1..={}",
                     m.scale_passes_per_update,
-                    crate::motion::MAX_SCALE_PASSES
+                    crate::config::MAX_SCALE_PASSES
                 ),
             );
         }

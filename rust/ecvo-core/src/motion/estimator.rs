@@ -8,7 +8,7 @@ use nalgebra::{Matrix6, SymmetricEigen};
 use super::warp::NoiseGain;
 use super::{Failure, MAX_STARTS, MAX_STEPS, MotionResult, NormalEquations, Status};
 use crate::Pose;
-use crate::config::{MotionConfig, MotionLevel, Weighting};
+use crate::config::{MAX_SCALE_PASSES, MotionConfig, MotionLevel, Weighting};
 use crate::noise::DepthSpread;
 use crate::prepare::{ImageLevel, PreparedFrame};
 use crate::scale::{self, PassSums, Scale, Whitener};
@@ -46,9 +46,6 @@ pub(super) trait Loops {
 
 /// Smallest number of residuals a coarse step needs to be worth solving.
 const MIN_STEP_RESIDUALS: usize = 24;
-
-/// Most fixed-point passes of one scale fit.
-pub const MAX_SCALE_PASSES: usize = 20;
 
 /// The settings of one `MOTION` call, in the form the per-pixel loops use.
 #[derive(Clone, Copy, Debug)]

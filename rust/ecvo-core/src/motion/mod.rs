@@ -26,7 +26,7 @@
 //! gives the same bits.
 
 mod estimator;
-pub use estimator::MAX_SCALE_PASSES;
+pub use crate::config::MAX_SCALE_PASSES;
 mod lanes;
 mod normal;
 #[cfg(test)]

@@ -130,7 +130,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             self.counters.overlap_keyframes += 1;
         }
         let new_keyframe = far || thin || fell_back || !believed;
-        let every = u64::from(self.config.refine_every);
+        let every = u64::from(self.config.keyframe_fuse_every);
         let periodic = keyframe.is_some_and(|k| every > 0 && (index - k.index) % every == 0);
         let mut posterior = None;
         if (new_keyframe || periodic)
