@@ -17,7 +17,7 @@ from pathlib import Path
 
 def module_of(src: Path, f: Path) -> tuple:
     parts = list(f.relative_to(src).with_suffix("").parts)
-    if parts[-1] in ("mod", "lib"):
+    if parts[-1] in ("mod", "lib", "main"):
         parts = parts[:-1]
     return tuple(parts)
 

@@ -40,9 +40,10 @@ pub use error::{Error, Result};
 pub use memory::{DEFAULT_MEMORY_BUDGET, MemoryEstimate};
 pub use motion::{MotionEstimator, MotionResult};
 pub use nalgebra;
+pub use odometry::Odometry;
 pub use prepare::simd::path_name as simd_path;
 pub use prepare::{PreparedFrame, Preparer};
-pub use tracker::{Counters, FrameOutput, Odometry, Tracker, TrackingState, comp, frame_to_frame};
+pub use tracker::{Counters, FrameOutput, Tracker, TrackingState, comp, frame_to_frame};
 
 /// A rigid motion in double precision. Poses are camera-to-world; the world is the
 /// first camera.

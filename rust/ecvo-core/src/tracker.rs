@@ -22,14 +22,15 @@ pub use crate::counters::Counters;
 use crate::error::Result;
 use crate::motion::{MotionEstimator, MotionResult};
 use crate::noise::NoiseFit;
-pub use crate::odometry::{Odometry, frame_to_frame, working_motion};
 use crate::prepare::{PreparedFrame, Preparer};
 pub use crate::prior::{Velocity, predict};
 use crate::se3;
 use crate::spread::SpreadWatch;
 
+mod frame_to_frame;
 mod keyframe;
 mod recovery;
+pub use frame_to_frame::{frame_to_frame, working_motion};
 use keyframe::KeyframeStep;
 
 /// `comp(T, (εd, εa))`: true when `‖t‖ > εd` or `tr(R) < 2 cos εa + 1`, i.e. when the

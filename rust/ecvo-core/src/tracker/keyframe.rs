@@ -11,11 +11,11 @@ use std::ops::Deref;
 
 use nalgebra::Matrix6;
 
+use super::frame_to_frame::frame_to_frame;
 use super::{FrameOutput, Kept, Tracker, believable, comp, plausible_speed, ready};
 use crate::Pose;
 use crate::correction::{chain_step, correction_distance, fuse_correction};
 use crate::motion::MotionResult;
-use crate::odometry::frame_to_frame;
 use crate::prepare::PreparedFrame;
 use crate::se3;
 
