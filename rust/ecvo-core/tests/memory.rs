@@ -98,9 +98,17 @@ fn the_estimate_bounds_what_odometry_allocates() {
         (640, 480),
         (1280, 720),
     ] {
-        for mode in [Mode::Naive, Mode::L2] {
+        for (mode, lookup) in [
+            (Mode::Naive, None),
+            (Mode::L2, None),
+            (Mode::L2, Some(ecvo_core::LookupDepth::Raw)),
+        ] {
             let c = camera(w, h);
-            let config = Config::new(c, Preset::Phone, mode);
+            let mut config = Config::new(c, Preset::Phone, mode);
+            if let Some(d) = lookup {
+                config.keyframes = true;
+                config.lookup_depth = d;
+            }
             let est = memory::estimate(&config);
             let frames: Vec<_> = (0..12).map(|k| frame(&c, k)).collect();
             let peak = peak_of(|| track(&config, &frames));

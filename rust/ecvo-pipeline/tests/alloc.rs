@@ -83,6 +83,12 @@ fn warm_pipeline_does_not_allocate_per_frame() {
     check(config, &frames, 20);
     let (config, frames) = common::synthetic_640x480(30, 7);
     check(config, &frames, 10);
+    // Keyframe tracking with frames prepared for lookup: the tracker finishes the
+    // reference sides in place, without allocating.
+    let (mut config, frames) = common::synthetic(60, 7);
+    config.keyframes = true;
+    config.lookup_depth = ecvo_core::LookupDepth::Raw;
+    check(config, &frames, 20);
 }
 
 /// Runs `frames` through a pipeline and counts the allocations after the first `warm`.

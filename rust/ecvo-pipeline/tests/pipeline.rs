@@ -97,20 +97,39 @@ fn offline_poses_equal_sequential_odometry_bit_for_bit_at_1_2_and_4_threads() {
 #[test]
 fn keyframe_tracking_offline_equals_sequential_odometry_bit_for_bit() {
     let (config, frames) = stream();
+    // Every frame prepared whole, and frames prepared for lookup whose reference side
+    // the tracker finishes (with a geometry stage reading the finished frames).
+    for lookup in [
+        ecvo_core::LookupDepth::Filtered,
+        ecvo_core::LookupDepth::Raw,
+        ecvo_core::LookupDepth::Bilateral,
+    ] {
+        keyframe_tracking_matches(config, frames, lookup);
+    }
+}
+
+fn keyframe_tracking_matches(
+    config: &Config,
+    frames: &[common::Frame],
+    lookup: ecvo_core::LookupDepth,
+) {
     let mut config = config.clone();
     config.keyframes = true;
+    config.lookup_depth = lookup;
     let (expected, odo) = sequential(&config, frames);
     let c = odo.tracker().counters();
     assert!(
         c.references[0] > 0 && c.keyframe_fusions > 0,
         "the stream must make keyframes: {c:?}"
     );
+    let mut first_cloud = None;
     for threads in [1, 2] {
         let pipeline = Pipeline::new(
             config.clone(),
             PipelineOptions {
                 threads,
                 keep_trajectory: true,
+                geometry: Some(Default::default()),
                 ..PipelineOptions::default()
             },
         )
@@ -125,10 +144,22 @@ fn keyframe_tracking_offline_equals_sequential_odometry_bit_for_bit() {
             assert_eq!(
                 common::bits(&rec.pose),
                 common::bits(&want.pose),
-                "frame {i}, {threads} threads"
+                "frame {i}, {threads} threads, {lookup:?}"
             );
         }
         assert_eq!(&summary.stats.counters, odo.tracker().counters());
+        // The cloud has the reference frames' points, read after they were finished:
+        // the same at every thread count.
+        let cloud: Vec<[u32; 3]> = summary
+            .cloud
+            .iter()
+            .map(|p| p.position.map(f32::to_bits))
+            .collect();
+        assert!(cloud.len() > 1000, "{lookup:?}: {} points", cloud.len());
+        match &first_cloud {
+            None => first_cloud = Some(cloud),
+            Some(c) => assert!(c == &cloud, "{lookup:?}: cloud at {threads} threads"),
+        }
         // The filter stage cannot know the keyframe: it computes nothing ahead.
         assert_eq!(summary.stats.ahead_computed, 0);
     }
