@@ -149,18 +149,48 @@ pub(crate) fn lookup_depth(config: &Config) -> Option<LookupDepth> {
         .then_some(config.lookup_depth)
 }
 
-/// Level 0's compact planes without removal: intensity in [0, 1], depth as given
-/// (NaN where missing). Returns the pixels with depth.
+/// Level 0's compact planes without removal: intensity in [0, 1], and depth (NaN
+/// where missing) kept only where it agrees within [`EDGE_AGREEMENT`] with its four
+/// neighbours (the cheap stand-in of the contour filter: the warp interpolates no
+/// depth across an edge). Returns the pixels with depth.
 #[inline(never)]
-fn plain_planes(intensity: &[u8], depth: &[f32], planes: &mut pyramid::Planes) -> usize {
+fn plain_planes(intensity: &[u8], depth: &[f32], w: usize, planes: &mut pyramid::Planes) -> usize {
     planes.intensity.resize(intensity.len(), 0.0);
     planes.depth.resize(depth.len(), f32::NAN);
     for (o, &i) in planes.intensity.iter_mut().zip(intensity) {
         *o = i as f32 * (1.0 / 255.0);
     }
-    planes.depth.copy_from_slice(depth);
-    depth.iter().map(|z| !z.is_nan() as usize).sum()
+    let n = depth.len();
+    let h = n / w.max(1);
+    let mut valid = 0;
+    for y in 0..h {
+        let r = y * w;
+        let (zu, zc, zd) = (
+            &depth[r.saturating_sub(w)..][..w],
+            &depth[r..r + w],
+            &depth[(r + w).min(n - w)..][..w],
+        );
+        let out = &mut planes.depth[r..r + w];
+        for x in 0..w {
+            let z = zc[x];
+            let (l, rr) = (zc[x.saturating_sub(1)], zc[(x + 1).min(w - 1)]);
+            let tol = EDGE_AGREEMENT * z;
+            // Branch-free: a NaN neighbour fails every comparison, so it keeps the pixel.
+            let edge = ((l - z).abs() > tol)
+                | ((rr - z).abs() > tol)
+                | ((zu[x] - z).abs() > tol)
+                | ((zd[x] - z).abs() > tol);
+            let keep = !z.is_nan() & !edge;
+            out[x] = if keep { z } else { f32::NAN };
+            valid += keep as usize;
+        }
+    }
+    valid
 }
+
+/// How far (relative) a lookup depth may differ from a neighbour's before the pixel
+/// counts as a depth edge and loses its depth: the pyramid's 2x2 agreement rule.
+const EDGE_AGREEMENT: f32 = 0.03;
 
 impl Preparer {
     /// The lookup levels of `view` alone, from its depth as `depth` says; the raw
@@ -190,7 +220,12 @@ impl Preparer {
         self.smooth_depth(view.depth, bilateral);
         self.planes
             .resize_with(self.pyramid_depth + 1, pyramid::Planes::default);
-        out.valid_depth = plain_planes(view.intensity, &self.smoothed, &mut self.planes[0]);
+        out.valid_depth = plain_planes(
+            view.intensity,
+            &self.smoothed,
+            self.camera.width,
+            &mut self.planes[0],
+        );
         out.removed_by_normal = 0;
         out.removed_by_contour = 0;
         out.normals.clear();
@@ -373,19 +408,38 @@ mod tests {
                         assert!(!lf.is_reference_ready(), "{what}");
                         assert!(lf.templates().is_empty(), "{what}");
                         assert!(lf.normals.is_empty(), "{what}");
-                        // The lookup levels: level 0 of 160x120 holds the raw depth.
+                        // The lookup levels: level 0 of 160x120 holds the raw depth,
+                        // less the pixels at a depth edge (a neighbour more than 3 %
+                        // away), and the intensity.
                         if w == 160 && depth == LookupDepth::Raw {
                             let l0 = &lf.levels[0].samples;
-                            for (i, &raw) in d.iter().enumerate() {
-                                let z = l0[i][D];
-                                let want = raw as f32 * (1.0 / 1000.0);
-                                assert!(
-                                    (raw == 0 && z.is_nan()) || z.to_bits() == want.to_bits(),
-                                    "{what}: pixel {i}"
-                                );
-                                let gray = intensity[i] as f32 * (1.0 / 255.0);
-                                assert_eq!(l0[i][I].to_bits(), gray.to_bits(), "{what}");
+                            let m = |x: usize, y: usize| d[y * w + x] as f32 * (1.0 / 1000.0);
+                            let (mut kept, mut edges) = (0, 0);
+                            for y in 0..h {
+                                for x in 0..w {
+                                    let (i, z) = (y * w + x, m(x, y));
+                                    let near = [
+                                        m(x.saturating_sub(1), y),
+                                        m((x + 1).min(w - 1), y),
+                                        m(x, y.saturating_sub(1)),
+                                        m(x, (y + 1).min(h - 1)),
+                                    ];
+                                    let edge =
+                                        near.iter().any(|&n| n > 0.0 && (n - z).abs() > 0.03 * z);
+                                    let got = l0[i][D];
+                                    if d[i] == 0 || edge {
+                                        assert!(got.is_nan(), "{what}: pixel {i}");
+                                        edges += (d[i] != 0) as usize;
+                                    } else {
+                                        assert_eq!(got.to_bits(), z.to_bits(), "{what}: {i}");
+                                        kept += 1;
+                                    }
+                                    let gray = intensity[i] as f32 * (1.0 / 255.0);
+                                    assert_eq!(l0[i][I].to_bits(), gray.to_bits(), "{what}");
+                                }
                             }
+                            assert!(edges > 100 && kept > 10 * edges, "{what}: {kept} {edges}");
+                            assert_eq!(lf.valid_depth, kept, "{what}");
                         }
                         finisher.finish(&lf);
                         assert!(lf.is_reference_ready(), "{what}");
