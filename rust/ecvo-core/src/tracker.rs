@@ -373,6 +373,37 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
                 &moved,
                 dt,
             );
+        // Keyframe tracking, against the previous frame (the keyframe): a registration
+        // that went wrong from the start that won the coarsest step is tried once more
+        // from the other start alone (the chain keeps its \[A\] as the paper has it).
+        if !believed
+            && self.config.keyframes
+            && keyframe.is_none()
+            && let Some(p) = prior
+        {
+            let other = if f2f.start == 0 { p } else { Pose::identity() };
+            let r = self
+                .estimator
+                .motion(&frame, &prev.frame, &other, &self.motion);
+            out.motion_estimations += 1;
+            self.counters.motion_estimations += 1;
+            if r.is_ok()
+                && believable(
+                    &self.config,
+                    &self.spread,
+                    &mut self.counters,
+                    &r,
+                    &r.pose,
+                    dt,
+                )
+            {
+                believed = true;
+                reg = r;
+                out.frame_to_frame = Some(r);
+                registered = se3::compose(&prev.pose, &r.pose);
+                moved = r.pose;
+            }
+        }
         if believed
             && keyframe.is_some()
             && self.config.motion.weighting == Weighting::Bivariate
