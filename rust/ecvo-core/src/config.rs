@@ -173,11 +173,13 @@ pub enum DepthNoiseModel {
 pub enum LookupDepth {
     /// The whole preparation for every frame: bilateral filter, normal and contour
     /// removal, the templates.
-    #[default]
     Filtered,
-    /// The sensor's depth as it is (in range, in metres), averaged down the pyramid.
+    /// The sensor's depth as it is (in range, in metres), less the pixels at a depth
+    /// edge, averaged down the pyramid.
     Raw,
-    /// The bilateral filter alone, without the removal filters.
+    /// The bilateral filter alone, without the removal filters, less the pixels at a
+    /// depth edge (the default).
+    #[default]
     Bilateral,
 }
 
@@ -335,7 +337,9 @@ pub struct Config {
     /// With [`Config::keyframes`]: every this many frames after the keyframe, the
     /// registration against it is also fused with the chain through the previous
     /// frame (one more `MOTION` call, and the previous frame's reference side
-    /// finished), as a new keyframe's always is. 0 switches it off.
+    /// finished), as a new keyframe's always is. 0 (the default, chosen on the
+    /// suite, issue 46: it changed no group's drift by 1 % and costs a `MOTION` call
+    /// and a finished frame) switches it off.
     pub keyframe_fuse_every: u32,
     /// Keyframe tracking (issue 26, as DVO-SLAM and visual-odometry-rs do): every
     /// frame is registered against the level-1 reference, the keyframe, instead of
@@ -349,9 +353,13 @@ pub struct Config {
     /// believed and the frame registered against the previous frame instead. A new
     /// keyframe's registration is fused with the chain through the previous frame
     /// (its registration against the keyframe, then \[A\]) as a correction is, with
-    /// `fuse_corrections`. Levels 2 and up correct as in the paper. Needs at least one
-    /// reference level. Off by default (chosen on the suite: better on slow motion,
-    /// worse on the real sequences) and in [`Config::paper`].
+    /// `fuse_corrections`. When the keyframe is the previous frame and the
+    /// registration is not believed, it is tried once more from the start that lost
+    /// the coarsest step. Levels 2 and up correct as in the paper. Needs at least one
+    /// reference level. On by default since issue 46 (with
+    /// [`LookupDepth::Bilateral`], chosen on the suite by group geometric means of
+    /// drift against the chain: real 1.024, fast 0.893, weak 0.691, noise 0.933; see
+    /// `docs/accuracy.md`); off in [`Config::paper`] and with `--tracking chain`.
     pub keyframes: bool,
     /// With [`Config::keyframes`]: a frame on which fewer than this fraction of the
     /// keyframe's finest template points land (valid residuals) becomes the new
@@ -374,7 +382,7 @@ pub struct Config {
     /// its reference side (the filters, the removal masks, the templates) is
     /// finished once, by the tracker, when the frame is first registered against
     /// (a keyframe, or the previous frame of a fall-back or a fusion). Ignored
-    /// without keyframe tracking.
+    /// without keyframe tracking. [`LookupDepth::Bilateral`] by default.
     pub lookup_depth: LookupDepth,
     /// A frame becomes an anchor after a loss only with at least this fraction of
     /// its pixels carrying depth after filtering.
@@ -453,11 +461,11 @@ impl Config {
             max_spread_jump: 5.0,
             fuse_corrections: true,
             refine_every: 3,
-            keyframe_fuse_every: 3,
-            keyframes: false,
+            keyframe_fuse_every: 0,
+            keyframes: true,
             keyframe_min_overlap: 0.5,
             keyframe_max_spread_growth: f64::INFINITY,
-            lookup_depth: LookupDepth::Filtered,
+            lookup_depth: LookupDepth::Bilateral,
             min_anchor_depth_fraction: 0.05,
             min_anchor_texture_fraction: 0.02,
             memory_budget: DEFAULT_MEMORY_BUDGET,
