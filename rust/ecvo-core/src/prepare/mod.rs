@@ -288,20 +288,11 @@ pub struct Preparer {
 impl Preparer {
     /// A preparer for `config` (validated by the caller).
     pub fn new(config: &Config) -> Self {
-        let spatial = match config.filter.bilateral {
-            Some(b) => {
-                let r = b.radius as isize;
-                let s2 = 2.0 * b.sigma_space_px * b.sigma_space_px;
-                let mut v = Vec::new();
-                for dy in -r..=r {
-                    for dx in -r..=r {
-                        v.push((-((dx * dx + dy * dy) as f32) / s2).exp());
-                    }
-                }
-                v
-            }
-            None => Vec::new(),
-        };
+        let spatial = config
+            .filter
+            .bilateral
+            .map_or(Vec::new(), |b| spatial_weights(&b));
+        let lookup = side::lookup_depth(config);
         let c = config.camera;
         let (ray_x, ray_y) = rays(&c);
         Preparer {
@@ -321,7 +312,7 @@ impl Preparer {
             planes: Vec::new(),
             selector: select::Selector::default(),
             keep_normals: true,
-            lookup: side::lookup_depth(config),
+            lookup,
             side_levels: Vec::new(),
         }
     }
@@ -395,7 +386,7 @@ impl Preparer {
         normals: &mut Vec<[f32; 3]>,
     ) -> removal::Counts {
         let (w, h) = (self.camera.width, self.camera.height);
-        self.smooth_depth(view.depth, self.filter.bilateral);
+        self.smooth_depth(view.depth, false);
         let angles = removal::Angles {
             cos_n: self
                 .filter
@@ -433,8 +424,14 @@ impl Preparer {
     }
 
     /// Raw depth to metres (out-of-range depth is missing) into `self.smoothed`,
-    /// smoothed by the bilateral filter `b` when there is one.
-    fn smooth_depth(&mut self, depth: &[u16], b: Option<crate::config::BilateralConfig>) {
+    /// smoothed by the configured bilateral filter when there is one (for a lookup
+    /// frame, `lookup`, only with [`LookupDepth::Bilateral`]).
+    fn smooth_depth(&mut self, depth: &[u16], lookup: bool) {
+        let b = match self.lookup {
+            Some(LookupDepth::Raw) if lookup => None,
+            _ => self.filter.bilateral,
+        };
+        let spatial = self.spatial.as_slice();
         let (w, h) = (self.camera.width, self.camera.height);
         let range = bilateral::DepthRange {
             scale: 1.0 / self.camera.depth_scale as f32,
@@ -447,7 +444,7 @@ impl Preparer {
                 bilateral::load_padded(depth, w, h, b.radius, range, &mut self.padded_depth);
                 bilateral::filter(
                     &self.padded_depth,
-                    &self.spatial,
+                    spatial,
                     w,
                     b.radius,
                     b.sigma_depth_rel,
@@ -514,6 +511,19 @@ impl Preparer {
             }
         }
     }
+}
+
+/// The bilateral filter's spatial weights, row-major over its window.
+fn spatial_weights(b: &crate::config::BilateralConfig) -> Vec<f32> {
+    let r = b.radius as isize;
+    let s2 = 2.0 * b.sigma_space_px * b.sigma_space_px;
+    let mut v = Vec::new();
+    for dy in -r..=r {
+        for dx in -r..=r {
+            v.push((-((dx * dx + dy * dy) as f32) / s2).exp());
+        }
+    }
+    v
 }
 
 /// `(1/fx, 1/fy, cx, cy)` in `f32`: a pixel `(x, y)` at depth `z` back-projects to

@@ -14,6 +14,7 @@
 use std::ops::Deref;
 use std::sync::{PoisonError, RwLock, RwLockReadGuard};
 
+use super::simd::multiversion;
 use super::{PreparedFrame, Preparer, Template, pyramid};
 use crate::camera::{Camera, FrameView};
 use crate::config::{Config, LookupDepth};
@@ -152,7 +153,8 @@ pub(crate) fn lookup_depth(config: &Config) -> Option<LookupDepth> {
 /// Level 0's compact planes without removal: intensity in [0, 1], and depth (NaN
 /// where missing) kept only where it agrees within [`EDGE_AGREEMENT`] with its four
 /// neighbours (the cheap stand-in of the contour filter: the warp interpolates no
-/// depth across an edge). Returns the pixels with depth.
+/// depth across an edge; at the border the missing neighbour is the pixel itself).
+/// Returns the pixels with depth.
 #[inline(never)]
 fn plain_planes(intensity: &[u8], depth: &[f32], w: usize, planes: &mut pyramid::Planes) -> usize {
     planes.intensity.resize(intensity.len(), 0.0);
@@ -165,27 +167,60 @@ fn plain_planes(intensity: &[u8], depth: &[f32], w: usize, planes: &mut pyramid:
     let mut valid = 0;
     for y in 0..h {
         let r = y * w;
-        let (zu, zc, zd) = (
-            &depth[r.saturating_sub(w)..][..w],
-            &depth[r..r + w],
-            &depth[(r + w).min(n - w)..][..w],
-        );
+        let up = &depth[r.saturating_sub(w)..][..w];
+        let down = &depth[(r + w).min(n - w)..][..w];
+        let row = &depth[r..r + w];
         let out = &mut planes.depth[r..r + w];
-        for x in 0..w {
-            let z = zc[x];
-            let (l, rr) = (zc[x.saturating_sub(1)], zc[(x + 1).min(w - 1)]);
-            let tol = EDGE_AGREEMENT * z;
-            // Branch-free: a NaN neighbour fails every comparison, so it keeps the pixel.
-            let edge = ((l - z).abs() > tol)
-                | ((rr - z).abs() > tol)
-                | ((zu[x] - z).abs() > tol)
-                | ((zd[x] - z).abs() > tol);
-            let keep = !z.is_nan() & !edge;
-            out[x] = if keep { z } else { f32::NAN };
-            valid += keep as usize;
-        }
+        valid += edge_row(up, row, down, out) as usize;
     }
     valid
+}
+
+multiversion! {
+    /// One row of [`plain_planes`]' depth: `row`'s depth kept where it agrees with
+    /// its left and right neighbours and with `up` and `down` (the rows above and
+    /// below); returns how many were kept.
+    fn edge_row(up: &[f32], row: &[f32], down: &[f32], out: &mut [f32]) -> u32 = edge_row_kernel;
+}
+
+#[inline(always)]
+fn edge_row_kernel(up: &[f32], row: &[f32], down: &[f32], out: &mut [f32]) -> u32 {
+    let w = row.len();
+    let (up, down, out) = (&up[..w], &down[..w], &mut out[..w]);
+    // Branch-free: a NaN neighbour fails every comparison, so it keeps the pixel.
+    let keep = |z: f32, l: f32, r: f32, u: f32, d: f32| {
+        let tol = EDGE_AGREEMENT * z;
+        let edge = ((l - z).abs() > tol)
+            | ((r - z).abs() > tol)
+            | ((u - z).abs() > tol)
+            | ((d - z).abs() > tol);
+        !z.is_nan() & !edge
+    };
+    let mut count = 0u32;
+    if w < 3 {
+        for x in 0..w {
+            let (l, r) = (row[x.saturating_sub(1)], row[(x + 1).min(w - 1)]);
+            let k = keep(row[x], l, r, up[x], down[x]);
+            out[x] = if k { row[x] } else { f32::NAN };
+            count += k as u32;
+        }
+        return count;
+    }
+    for x in [0, w - 1] {
+        let (l, r) = (row[x.saturating_sub(1)], row[(x + 1).min(w - 1)]);
+        let k = keep(row[x], l, r, up[x], down[x]);
+        out[x] = if k { row[x] } else { f32::NAN };
+        count += k as u32;
+    }
+    let m = w - 2;
+    let (zl, zc, zr) = (&row[..m], &row[1..m + 1], &row[2..]);
+    let (zu, zd, o) = (&up[1..m + 1], &down[1..m + 1], &mut out[1..m + 1]);
+    for i in 0..m {
+        let k = keep(zc[i], zl[i], zr[i], zu[i], zd[i]);
+        o[i] = if k { zc[i] } else { f32::NAN };
+        count += k as u32;
+    }
+    count
 }
 
 /// How far (relative) a lookup depth may differ from a neighbour's before the pixel
@@ -213,11 +248,8 @@ impl Preparer {
                 t.points.clear();
             }
         }
-        let bilateral = match depth {
-            LookupDepth::Bilateral => self.filter.bilateral,
-            LookupDepth::Raw | LookupDepth::Filtered => None,
-        };
-        self.smooth_depth(view.depth, bilateral);
+        debug_assert_eq!(self.lookup, Some(depth));
+        self.smooth_depth(view.depth, true);
         self.planes
             .resize_with(self.pyramid_depth + 1, pyramid::Planes::default);
         out.valid_depth = plain_planes(
