@@ -85,6 +85,12 @@ impl Odometry {
         Ok(self.tracker.track(frame))
     }
 
+    /// Seeds the next frame's registration with an outside guess of its motion from
+    /// the previous frame ([`Tracker::set_guess`]).
+    pub fn set_guess(&mut self, motion: Pose) {
+        self.tracker.set_guess(motion);
+    }
+
     /// Prepares the frames from the next one on with new intrinsics of the same image
     /// size ([`Preparer::set_intrinsics`]); tracking goes on across the change.
     pub fn set_intrinsics(&mut self, camera: Camera) -> Result<()> {
