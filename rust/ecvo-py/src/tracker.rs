@@ -208,8 +208,15 @@ impl PyTracker {
         let engine = EngineSettings::from_kwargs(preset, mode, &mut kw)?;
         kw.finish()?;
         let config = engine.config(camera)?;
-        let odo = Odometry::new(config.clone())
-            .map_err(|e| PyValueError::new_err(format!("invalid tracker configuration: {e}")))?;
+        let odo = Odometry::new(config.clone()).map_err(|e| {
+            let hint = match e {
+                ecvo_core::Error::MemoryBudget { .. } => {
+                    "; Tracker(..., memory_budget=BYTES) sets the budget"
+                }
+                _ => "",
+            };
+            PyValueError::new_err(format!("invalid tracker configuration: {e}{hint}"))
+        })?;
         Ok(PyTracker {
             inner: Mutex::new(Inner {
                 odo: Some(odo),
