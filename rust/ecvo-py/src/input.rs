@@ -144,17 +144,30 @@ fn view<'py, T: Element>(
 }
 
 /// Grey values of float intensities in [0, 1] (Open3D's `RGBDImage.color`):
-/// `round(255 x)`, exact for `k / 255`.
+/// `round(255 x)`, exact for `k / 255`. One pass without branches (so that it
+/// vectorises), the range checked on the way.
 fn grey_from_float<T: Copy + Into<f64>>(v: ArrayViewD<'_, T>, out: &mut Vec<u8>) -> PyResult<()> {
     out.clear();
-    for x in v.iter() {
-        let x: f64 = (*x).into();
-        if !(0.0..=1.0).contains(&x) {
-            return Err(PyValueError::new_err(format!(
-                "float intensity must be in [0, 1] (grey / 255), got {x}"
-            )));
-        }
-        out.push((x * 255.0).round() as u8);
+    let mut bad = false;
+    let mut convert = |x: T| {
+        let x: f64 = x.into();
+        bad |= !(0.0..=1.0).contains(&x);
+        // x ≥ 0: adding 0.5 and truncating is rounding (half away from zero).
+        (x * 255.0 + 0.5) as u8
+    };
+    match v.as_slice() {
+        Some(s) => out.extend(s.iter().map(|x| convert(*x))),
+        None => out.extend(v.iter().map(|x| convert(*x))),
+    }
+    if bad {
+        let x: f64 = v
+            .iter()
+            .map(|x| (*x).into())
+            .find(|x: &f64| !(0.0..=1.0).contains(x))
+            .unwrap_or(f64::NAN);
+        return Err(PyValueError::new_err(format!(
+            "float intensity must be in [0, 1] (grey / 255), got {x}"
+        )));
     }
     Ok(())
 }
@@ -229,28 +242,38 @@ pub fn intensity<'py>(
 }
 
 /// Raw depth of float metres: NaN and 0 are no measurement, others
-/// `round(metres · depth_scale)` (exact for metres that came from raw / scale).
+/// `round(metres · depth_scale)` (exact for metres that came from raw / scale). One
+/// pass without branches (so that it vectorises), the range checked on the way.
 fn raw_from_metres<T: Copy + Into<f64>>(
     v: ArrayViewD<'_, T>,
     depth_scale: f64,
     out: &mut Vec<u16>,
 ) -> PyResult<()> {
     out.clear();
-    for x in v.iter() {
-        let m: f64 = (*x).into();
-        if m.is_nan() || m == 0.0 {
-            out.push(0);
-            continue;
-        }
-        let raw = (m * depth_scale).round();
-        if !(m > 0.0) || !(raw <= u16::MAX as f64) {
-            return Err(PyValueError::new_err(format!(
-                "float depth is metres (NaN or 0: no measurement) and must lie in \
-                 (0, {:.3}] at this camera's depth_scale {depth_scale} (65535 units); got {m}",
-                u16::MAX as f64 / depth_scale
-            )));
-        }
-        out.push(raw as u16);
+    let mut bad = false;
+    let mut convert = |x: T| {
+        let m: f64 = x.into();
+        let r = m * depth_scale + 0.5;
+        // Negative, infinite or beyond 65535 units (NaN compares false: no depth).
+        bad |= m < 0.0 || r >= 65536.0;
+        // Truncating r ≥ 0.5 is rounding; NaN casts to 0.
+        r as u16
+    };
+    match v.as_slice() {
+        Some(s) => out.extend(s.iter().map(|x| convert(*x))),
+        None => out.extend(v.iter().map(|x| convert(*x))),
+    }
+    if bad {
+        let m: f64 = v
+            .iter()
+            .map(|x| (*x).into())
+            .find(|m: &f64| *m < 0.0 || m * depth_scale + 0.5 >= 65536.0)
+            .unwrap_or(f64::NAN);
+        return Err(PyValueError::new_err(format!(
+            "float depth is metres (NaN or 0: no measurement) and must lie in \
+             [0, {:.3}] at this camera's depth_scale {depth_scale} (65535 units); got {m}",
+            u16::MAX as f64 / depth_scale
+        )));
     }
     Ok(())
 }
