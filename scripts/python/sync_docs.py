@@ -57,19 +57,6 @@ FN = re.compile(r"^(\s*)(?:pub )?fn (\w+)")
 
 def rewrite(path, docs, class_of_struct, used):
     lines = path.read_text().splitlines()
-    out = []
-    pending_class = None  # a #[pyclass] seen, its struct not yet
-    in_methods = None  # python class name of the #[pymethods] impl we are in
-    pyfunction = False
-    k = 0
-    # First pass: the attribute/doc block before an item is lines[start:k].
-    result = []
-    i = 0
-    while i < len(lines):
-        line = lines[i]
-        result.append(line)
-        i += 1
-    lines = result
 
     def block_start(idx):
         """Index where the doc comment + attributes before lines[idx] begin, and where
@@ -83,7 +70,8 @@ def rewrite(path, docs, class_of_struct, used):
         return j, attrs
 
     edits = []  # (start, end, new lines)
-    methods = False
+    methods = False  # a #[pymethods] seen, its impl not yet
+    in_methods = None  # the Python class of the #[pymethods] impl we are in
     for idx, line in enumerate(lines):
         s = line.strip()
         if s == "#[pymethods]":
