@@ -5,9 +5,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use ecvo_core::{Camera, Config, Mode, Preset, ReferenceLevel, Schedule};
-use ecvo_settings::{Settings, SettingsError};
 use ecvo_io::files::shown_path;
 use ecvo_io::{OpenOptions, Sequence};
+use ecvo_settings::{Settings, SettingsError};
 
 /// Everything that decides how a sequence is tracked.
 #[derive(Clone, Debug)]
