@@ -40,6 +40,14 @@ def main():
     ap.add_argument("--max-frames", type=int)
     ap.add_argument("--threads", type=int, default=None, help="engine pool size (default: rayon's global pool)")
     ap.add_argument("--preset", default="pc")
+    ap.add_argument(
+        "--input",
+        default="grey",
+        choices=["grey", "colour", "metres"],
+        help="what Tracker.push is given: uint8 grey + uint16 depth (read in place), "
+        "(H, W, 3) uint8 colour, or float32 metres depth (both converted in push); "
+        "the Rust engine always gets the grey/uint16 frames",
+    )
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
 
@@ -49,13 +57,20 @@ def main():
     for lap in range(args.laps):
         path += base if lap % 2 == 0 else base[::-1]
     frames = [(k / 30.0, i, d) for k, (i, d) in enumerate(path)]
+    if args.input == "colour":
+        given = [(t, np.repeat(i[..., None], 3, axis=2), d) for t, i, d in frames]
+    elif args.input == "metres":
+        scale = np.float32(seq.camera.depth_scale)
+        given = [(t, i, d.astype(np.float32) / scale) for t, i, d in frames]
+    else:
+        given = frames
     settings = dict(preset=args.preset, threads=args.threads)
 
     py_times, inner_times, rust_times = [], [], []
     for r in range(args.rounds + 1):
         tracker = ecvo.Tracker(seq.camera, **settings)
         times, inner = [], []
-        for t, i, d in frames:
+        for t, i, d in given:
             t0 = time.perf_counter()
             tracker.push(t, i, d)
             times.append(time.perf_counter() - t0)
@@ -74,6 +89,7 @@ def main():
         "frames_per_round": len(frames),
         "rounds": args.rounds,
         "threads": args.threads,
+        "input": args.input,
         "simd": _ecvo.simd_path,
         "python_ms": py,
         "engine_inside_push_ms": inner,
@@ -85,7 +101,10 @@ def main():
     if args.json:
         print(json.dumps(result, indent=2))
     else:
-        print(f"{args.sequence}: {len(frames)} frames x {args.rounds} rounds, threads {args.threads}")
+        print(
+            f"{args.sequence}: {len(frames)} frames x {args.rounds} rounds, threads {args.threads}, "
+            f"input {args.input}"
+        )
         rows = (
             ("Tracker.push (Python)", py, "ms"),
             ("  its Odometry::push", inner, "ms"),

@@ -31,7 +31,7 @@ trap 'rm -rf "$WORK"' EXIT
 echo "== fresh venv in $WORK/venv"
 "$PYTHON" -m venv "$WORK/venv"
 PY="$WORK/venv/bin/python"
-"$PY" -m pip install -q --disable-pip-version-check numpy pytest
+"$PY" -m pip install -q --disable-pip-version-check numpy pytest mypy
 echo "== pip install rust/ecvo-py"
 # --no-cache-dir: never a wheel cached from an earlier build of the same version.
 "$PY" -m pip install -q --disable-pip-version-check --no-cache-dir "$ROOT/rust/ecvo-py"

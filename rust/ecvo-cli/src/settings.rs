@@ -4,10 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use ecvo_core::config::parse_levels;
 use ecvo_core::{Camera, Config, Mode, Preset, ReferenceLevel, Schedule};
 use ecvo_io::files::shown_path;
 use ecvo_io::{OpenOptions, Sequence};
+use ecvo_settings::{Settings, SettingsError};
 
 /// Everything that decides how a sequence is tracked.
 #[derive(Clone, Debug)]
@@ -132,8 +132,11 @@ impl EngineChoice {
             if config.fuse_corrections { "fused" } else { "replaced" },
             match config.refine_every {
                 _ if config.keyframes => format!(
-                    ", keyframe tracking (new keyframe below {} overlap or above {}x spread)",
-                    config.keyframe_min_overlap, config.keyframe_max_spread_growth
+                    ", keyframe tracking ({:?} lookup depth, new keyframe below {} overlap or above {}x spread, fused every {} frames)",
+                    config.lookup_depth,
+                    config.keyframe_min_overlap,
+                    config.keyframe_max_spread_growth,
+                    config.keyframe_fuse_every
                 ),
                 0 => String::new(),
                 n if config.fuse_corrections => {
@@ -204,105 +207,64 @@ impl TrackSettings {
         Ok(sequence.every_nth(self.frame_step))
     }
 
+    /// The engine settings these make ([`ecvo_settings::Settings`], the one place
+    /// the CLI, the Python package and the JNI turn settings into a [`Config`]).
+    pub fn engine_settings(&self) -> Settings {
+        let e = &self.engine;
+        Settings {
+            preset: self.preset,
+            mode: self.mode,
+            levels: self.levels.clone(),
+            bilateral: self.bilateral,
+            normal_filter: self.normal_filter,
+            contour_filter: self.contour_filter,
+            paper: e.paper,
+            schedule: e.schedule.clone(),
+            point_budget: e.point_budget.clone(),
+            weighting: e.weighting,
+            depth_noise: e.depth_noise,
+            prior: e.prior,
+            max_correction_distance: e.max_correction_distance,
+            max_fine_depth_weight: e.max_fine_depth_weight,
+            min_predicted_decrease: e.min_predicted_decrease,
+            min_update_px: e.min_update_px,
+            scale_passes: e.scale_passes,
+            fuse_corrections: e.fuse_corrections,
+            refine_every: e.refine_every,
+            keyframes: e.keyframes,
+            keyframe_min_overlap: e.keyframe_min_overlap,
+            keyframe_max_spread_growth: e.keyframe_max_spread_growth,
+            lookup_depth: e.lookup_depth,
+            keyframe_fuse_every: e.keyframe_fuse_every,
+            memory_budget: self.max_memory,
+        }
+    }
+
     /// The tracker configuration for `camera`.
     ///
     /// The reference levels are `--levels` if given, else the preset's; the mode keeps
     /// none of them (naive), the first (l1) or all of them (l2, at least two).
     pub fn config(&self, camera: Camera) -> Result<Config> {
-        let mut config = if self.engine.paper {
-            Config::paper(camera, self.preset, Mode::L2)
-        } else {
-            Config::new(camera, self.preset, Mode::L2)
-        };
-        let e = &self.engine;
-        if let Some(name) = &e.schedule {
-            config.motion.levels = ecvo_core::parse_schedule(name, &camera)
-                .with_context(|| format!("--schedule {name}"))?;
-        }
-        if let Some(text) = &e.point_budget {
-            let budgets = ecvo_core::parse_point_budget(text)
-                .with_context(|| format!("--point-budget {text}"))?;
-            for (level, points) in budgets {
-                config.motion.set_point_budget(level, points);
+        self.engine_settings().config(camera).map_err(|e| match e {
+            SettingsError::Parse { key, text, source } => {
+                // As the flags were quoted before: only --levels in backticks.
+                let what = match key {
+                    "levels" => format!("--levels `{text}`"),
+                    _ => format!("--{} {text}", key.replace('_', "-")),
+                };
+                anyhow::Error::new(source).context(what)
             }
-        }
-        if let Some((w, fine)) = e.weighting {
-            config.motion.weighting = w;
-            config.motion.fine_weighting = fine;
-        }
-        if let Some(d) = e.depth_noise {
-            config.motion.depth_noise = d;
-        }
-        if let Some(p) = e.prior {
-            config.motion.prior = p;
-        }
-        if let Some(d) = e.max_correction_distance {
-            config.max_correction_distance = d;
-        }
-        if let Some(d) = e.min_predicted_decrease {
-            config.motion.min_predicted_decrease = d;
-        }
-        if let Some(d) = e.min_update_px {
-            config.motion.min_update_px = d;
-        }
-        if let Some(n) = e.scale_passes {
-            config.motion.scale_passes_per_update = n;
-        }
-        if let Some(d) = e.max_fine_depth_weight {
-            config.motion.max_fine_depth_weight = d;
-        }
-        if let Some(f) = e.fuse_corrections {
-            config.fuse_corrections = f;
-        }
-        if let Some(n) = e.refine_every {
-            config.refine_every = n;
-        }
-        if let Some(k) = e.keyframes {
-            config.keyframes = k;
-        }
-        if let Some(d) = e.lookup_depth {
-            config.lookup_depth = d;
-        }
-        if let Some(n) = e.keyframe_fuse_every {
-            config.keyframe_fuse_every = n;
-        }
-        if let Some(f) = e.keyframe_min_overlap {
-            config.keyframe_min_overlap = f;
-        }
-        if let Some(f) = e.keyframe_max_spread_growth {
-            config.keyframe_max_spread_growth = f;
-        }
-        if let Some(text) = &self.levels {
-            config.reference_levels =
-                parse_levels(text).with_context(|| format!("--levels `{text}`"))?;
-        }
-        let available = config.reference_levels.len();
-        let keep = match self.mode {
-            Mode::Naive => 0,
-            Mode::L1 => 1,
-            Mode::L2 => available.max(2),
-        };
-        if keep > available {
-            bail!(
-                "--mode {} needs at least {keep} reference level(s) but --levels `{}` gives {available}",
-                mode_name(self.mode),
-                self.levels.as_deref().unwrap_or_default()
-            );
-        }
-        config.reference_levels.truncate(keep);
-        if !self.bilateral {
-            config.filter.bilateral = None;
-        }
-        if !self.normal_filter {
-            config.filter.normal_max_angle_deg = None;
-        }
-        if !self.contour_filter {
-            config.filter.contour_angle_deg = None;
-        }
-        if let Some(b) = self.max_memory {
-            config.memory_budget = b;
-        }
-        config.validate().context("invalid tracker configuration")?;
-        Ok(config)
+            SettingsError::TooFewLevels {
+                mode,
+                needed,
+                levels,
+                available,
+            } => anyhow::anyhow!(
+                "--mode {mode} needs at least {needed} reference level(s) but --levels `{levels}` gives {available}"
+            ),
+            SettingsError::Invalid(source) => {
+                anyhow::Error::new(source).context("invalid tracker configuration")
+            }
+        })
     }
 }

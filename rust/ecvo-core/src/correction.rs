@@ -71,6 +71,7 @@ mod tests {
             steps: 1,
             error: 0.0,
             valid_pixels: 1000,
+            template_points: 1000,
             information,
             scale: None,
             start: 0,

@@ -19,6 +19,7 @@ pub mod config;
 pub mod correction;
 pub mod counters;
 pub mod error;
+pub mod lost;
 pub mod memory;
 pub mod motion;
 pub mod noise;
@@ -37,6 +38,7 @@ pub use config::{
     SCHEDULE_SHIFT_SIDE, Schedule, Weighting, parse_point_budget, parse_schedule,
 };
 pub use error::{Error, Result};
+pub use lost::LostReason;
 pub use memory::{DEFAULT_MEMORY_BUDGET, MemoryEstimate};
 pub use motion::{MotionEstimator, MotionResult};
 pub use nalgebra;

@@ -3,6 +3,7 @@
 
 use std::sync::Arc;
 
+use crate::Pose;
 use crate::camera::{Camera, FrameView};
 use crate::config::Config;
 use crate::error::Result;
@@ -49,6 +50,12 @@ impl Odometry {
         }
         self.pool.push(frame.clone());
         Ok(self.tracker.track(frame))
+    }
+
+    /// Seeds the next frame's registration with an outside guess of its motion from
+    /// the previous frame ([`Tracker::set_guess`]).
+    pub fn set_guess(&mut self, motion: Pose) {
+        self.tracker.set_guess(motion);
     }
 
     /// Prepares the frames from the next one on with new intrinsics of the same image

@@ -20,6 +20,7 @@ pub use crate::correction::correction_distance;
 use crate::correction::{chain_step, fuse_correction};
 pub use crate::counters::Counters;
 use crate::error::Result;
+pub use crate::lost::LostReason;
 use crate::motion::{MotionEstimator, MotionResult};
 use crate::noise::NoiseFit;
 use crate::prepare::{PreparedFrame, Preparer};
@@ -81,6 +82,14 @@ pub struct FrameOutput {
     /// Corrections of this frame that failed or were rejected (it kept the pose it
     /// had before each of them and did not become that level's reference).
     pub refused_corrections: u8,
+    /// The registration the frame's pose came from before any correction: \[A\]
+    /// (with keyframe tracking the one that gave the pose), or the recovery against a
+    /// kept reference. None for the first frame, a re-anchored one and a lost one.
+    /// Its `information` (`JᵀWJ` in the tangent space of the registered motion),
+    /// `scale` and `valid_pixels / template_points` are the frame's quality.
+    pub registration: Option<MotionResult>,
+    /// Why the frame was lost (None unless [`TrackingState::Lost`]).
+    pub lost_reason: Option<LostReason>,
 }
 
 /// Slack on the speed check, metres: registration noise on a short interval.
@@ -171,6 +180,9 @@ pub struct Tracker<F> {
     /// With frames prepared for lookup only ([`Config::lookup_depth`]): finishes the
     /// reference side of a frame before it is first registered against.
     finisher: Option<Preparer>,
+    /// An outside guess of the next frame's motion from the previous frame
+    /// ([`Tracker::set_guess`]), used once in place of the prediction.
+    guess: Option<Pose>,
 }
 
 /// Makes `frame` ready to be registered against: finishes its reference side when it
@@ -210,6 +222,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             noise: NoiseFit::new(config.motion.depth_noise),
             keyframe_chain: None,
             finisher: crate::prepare::lookup_depth(&config).map(|_| Preparer::whole(&config)),
+            guess: None,
             config,
         })
     }
@@ -284,6 +297,17 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         predict(v, timestamp - prev.frame.timestamp)
     }
 
+    /// Seeds the next frame's \[A\] with an outside guess of its motion from the
+    /// previous frame, `T_{c,p}` (the current camera in the previous camera's
+    /// coordinates: from an IMU, wheel odometry, another tracker), in place of the
+    /// constant-velocity prediction: \[A\] starts from the identity and from the
+    /// guess, and the better start at the coarsest step wins (a wrong guess costs
+    /// one coarse step). A recovery starts from it too. Used for the next frame only;
+    /// on the first frame it is ignored.
+    pub fn set_guess(&mut self, motion: Pose) {
+        self.guess = Some(motion);
+    }
+
     /// Tracks one prepared frame (Figure 1(b)).
     pub fn track(&mut self, frame: F) -> FrameOutput {
         self.track_with(frame, |_, _, _| None)
@@ -315,13 +339,16 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             reanchored: false,
             recovered: false,
             refused_corrections: 0,
+            registration: None,
+            lost_reason: None,
         };
+        let guess = self.guess.take();
         if self.prev.is_none() {
             self.anchor(frame, Pose::identity(), index);
             self.state = TrackingState::Tracking;
             return out;
         }
-        let prior = self.prior_for(frame.timestamp);
+        let prior = guess.or_else(|| self.prior_for(frame.timestamp));
         let Some(prev) = self.prev.clone() else {
             unreachable!("checked above")
         };
@@ -457,9 +484,16 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             let skip = keyframe.as_ref().map(|k| k.index);
             match self.recover(&frame, &predicted, dt, skip, &mut out) {
                 Some(p) => p,
-                None => return self.lose(frame, index, out),
+                None => {
+                    let speed_ok = plausible_speed(&moved, dt, self.config.max_speed_m_s);
+                    out.lost_reason = Some(LostReason::of(frame.valid_depth, &reg, speed_ok));
+                    return self.lose(frame, index, out);
+                }
             }
         };
+        if believed {
+            out.registration = Some(reg);
+        }
         self.lost_run = 0;
         self.state = TrackingState::Tracking;
         let add = if believed && self.config.fuse_corrections {

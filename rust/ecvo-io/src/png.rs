@@ -228,6 +228,54 @@ fn intensity_from<R: BufRead + Seek>(
     }
 }
 
+/// Reads an 8-bit intensity PNG as colour: `width * height * 3` RGB bytes into `out`
+/// (resized, allocation reused); gray is replicated to the three channels, alpha
+/// dropped. The same files and limits as [`read_intensity_png`], whose gray is
+/// [`rgb_to_gray`] of these channels.
+pub fn read_colour_png(
+    path: impl AsRef<Path>,
+    width: usize,
+    height: usize,
+    out: &mut Vec<u8>,
+) -> Result<()> {
+    let path = path.as_ref();
+    let file = open_file(path, max_png_file_bytes(width, height))?;
+    let mut reader = start(file, path, width, height)?;
+    let n = width * height;
+    let (ct, bits) = reader.output_color_type();
+    let unsupported = || {
+        Error::image(
+            path,
+            format!(
+                "intensity PNG is {}; expected 8-bit gray, RGB or RGBA",
+                describe(ct, bits)
+            ),
+        )
+    };
+    if bits != png::BitDepth::Eight {
+        return Err(unsupported());
+    }
+    match ct {
+        png::ColorType::Rgb => frame_into(&mut reader, path, n * 3, out),
+        png::ColorType::Grayscale | png::ColorType::GrayscaleAlpha | png::ColorType::Rgba => {
+            let ch = ct.samples();
+            let mut s = Vec::new();
+            frame_into(&mut reader, path, n * ch, &mut s)?;
+            out.clear();
+            out.reserve(n * 3);
+            for p in s.chunks_exact(ch) {
+                if ch <= 2 {
+                    out.extend_from_slice(&[p[0], p[0], p[0]]);
+                } else {
+                    out.extend_from_slice(&p[..3]);
+                }
+            }
+            Ok(())
+        }
+        _ => Err(unsupported()),
+    }
+}
+
 /// Decodes a depth PNG, which must be 16-bit gray of exactly `width` x `height`,
 /// into `out` (resized, allocation reused); anything else is an error naming the file.
 /// The file and memory limits are those of [`read_intensity_png`].

@@ -298,6 +298,24 @@ impl Sequence {
         load_into(&self.camera, self.root.as_deref(), info, index, frame)
     }
 
+    /// Decodes frame `index` with its colour: `(timestamp, rgb, depth)`, `rgb` being
+    /// `width * height * 3` bytes ([`crate::png::read_colour_png`]; the frame's
+    /// intensity is their gray).
+    pub fn load_colour_frame(&self, index: usize) -> Result<(f64, Vec<u8>, Vec<u16>)> {
+        let info = self.frames.get(index).ok_or(Error::FrameIndex {
+            index,
+            len: self.frames.len(),
+        })?;
+        let root = self.root.as_deref();
+        check_inside(&info.rgb, root)?;
+        check_inside(&info.depth, root)?;
+        let (w, h) = (self.camera.width, self.camera.height);
+        let (mut rgb, mut depth) = (Vec::new(), Vec::new());
+        crate::png::read_colour_png(&info.rgb, w, h, &mut rgb)?;
+        read_depth_png(&info.depth, w, h, &mut depth)?;
+        Ok((info.timestamp, rgb, depth))
+    }
+
     /// Streams the first `max_frames` frames (all if `None`), decoded ahead on a
     /// background thread with at most `prefetch` (at least 1) decoded frames waiting.
     /// See [`FrameReader`].

@@ -4,6 +4,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use ecvo_core::{Camera, Config, DEFAULT_MEMORY_BUDGET, Mode, Preset};
 use ecvo_pipeline::{Admission, GeometryOptions, Pipeline, PipelineOptions};
+use ecvo_settings::{Settings, SettingsError};
 use jni::sys::{jint, jlong};
 
 use crate::depth16::Confidence;
@@ -146,9 +147,16 @@ impl InitArgs {
             cy: self.cy,
             depth_scale,
         };
-        let mut config = Config::new(camera, preset, mode);
-        config.memory_budget = memory_budget();
-        config.validate().map_err(|e| bad(e.to_string()))?;
+        // The one place settings become a Config (ecvo-settings), as for the CLI
+        // and the Python package.
+        let settings = Settings {
+            memory_budget: Some(memory_budget()),
+            ..Settings::new(preset, mode)
+        };
+        let config = settings.config(camera).map_err(|e| match e {
+            SettingsError::Invalid(e) => bad(e.to_string()),
+            e => bad(e.to_string()),
+        })?;
         let options = PipelineOptions {
             threads,
             admission: if self.live {

@@ -10,15 +10,18 @@ matplotlib (pip install matplotlib); without --plot it is never imported.
 """
 
 import argparse
+import importlib
 import sys
 import time
+from typing import Any, List, Optional
 
 import numpy as np
+import numpy.typing as npt
 
 import ecvo
 
 
-def main(argv=None):
+def main(argv: Optional[List[str]] = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("sequence", help="sequence folder (TUM layout)")
     ap.add_argument("--camera", help="a camera.json overriding the folder's")
@@ -30,16 +33,16 @@ def main(argv=None):
     args = ap.parse_args(argv)
 
     seq = ecvo.read_sequence(args.sequence, camera=args.camera, max_frames=args.max_frames)
-    tracker = ecvo.Tracker(seq.camera, preset=args.preset, mode=args.mode)
     push_s = []
-    for timestamp, intensity, depth in seq:
-        t0 = time.perf_counter()
-        pose, state = tracker.push(timestamp, intensity, depth)
-        push_s.append(time.perf_counter() - t0)
-        if state == "lost":
-            print(f"{timestamp:.6f}: lost", file=sys.stderr)
-    est = tracker.trajectory()
-    c = tracker.counters()
+    with ecvo.Tracker(seq.camera, preset=args.preset, mode=args.mode) as tracker:
+        for timestamp, intensity, depth in seq:
+            t0 = time.perf_counter()
+            result = tracker.push(timestamp, intensity, depth)
+            push_s.append(time.perf_counter() - t0)
+            if result.state == "lost":
+                print(f"{timestamp:.6f}: lost ({result.reason})", file=sys.stderr)
+        est = tracker.trajectory()
+        c = tracker.counters()
     print(
         f"{len(est)} frames, {c['motion_estimations']} motion estimations, "
         f"references {c['references']}, {c['lost_frames']} lost; "
@@ -60,12 +63,16 @@ def main(argv=None):
     return 0
 
 
-def plot(path, est_xyz, gt, title):
+def plot(
+    path: str,
+    est_xyz: npt.NDArray[np.float64],
+    gt: Optional[npt.NDArray[np.float64]],
+    title: str,
+) -> None:
     try:
-        import matplotlib
-
+        matplotlib: Any = importlib.import_module("matplotlib")
         matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        plt: Any = importlib.import_module("matplotlib.pyplot")
     except ImportError:
         print("--plot needs matplotlib: pip install matplotlib", file=sys.stderr)
         sys.exit(2)

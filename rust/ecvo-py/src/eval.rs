@@ -93,9 +93,14 @@ pub fn ate_dict<'py>(py: Python<'py>, a: &AteResult) -> PyResult<Bound<'py, PyDi
     Ok(d)
 }
 
-/// Absolute trajectory error of `est` against `gt` after rigid alignment.
+/// evo's `t_max_diff` default (seconds): `ecvo.ate` pairs poses as `evo_ape` does
+/// by default. (`ecvo eval` and `run_sequence` keep ecvo-io's 0.02 s, TUM's
+/// `evaluate_ate.py` default.)
+pub const EVO_MAX_DT: f64 = 0.01;
+
+/// ATE of ``est`` against ``gt`` (TUM files or (N, 8) arrays); see ecvo.ate.
 #[pyfunction]
-#[pyo3(signature = (gt, est, max_dt = ecvo_io::eval::DEFAULT_MAX_DT))]
+#[pyo3(signature = (gt, est, max_dt = EVO_MAX_DT))]
 pub fn ate<'py>(
     py: Python<'py>,
     gt: &Bound<'py, PyAny>,

@@ -14,7 +14,10 @@ use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyValueError};
 use pyo3::prelude::*;
 
 mod arrays;
+mod camera;
 mod eval;
+mod input;
+mod result;
 mod sequence;
 mod settings;
 mod tracker;
@@ -33,8 +36,9 @@ pub(crate) fn io_err(e: ecvo_io::Error) -> PyErr {
 
 #[pymodule]
 fn _ecvo(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_class::<tracker::PyCamera>()?;
+    m.add_class::<camera::PyCamera>()?;
     m.add_class::<tracker::PyTracker>()?;
+    m.add_class::<result::PyFrameResult>()?;
     m.add_class::<sequence::PySequence>()?;
     m.add_class::<sequence::PySequenceIter>()?;
     m.add_function(wrap_pyfunction!(sequence::read_sequence, m)?)?;

@@ -2,21 +2,23 @@
 //! tracking one the way `ecvo run` does.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Instant;
 
 use ecvo_core::{FrameOutput, TrackingState};
 use ecvo_io::{Sequence, Trajectory};
 use ecvo_pipeline::{Admission, Pipeline, PipelineOptions, PushStatus};
-use numpy::ndarray::Array2;
-use numpy::{PyArray1, PyArray2};
+use numpy::ndarray::{Array2, Array3};
+use numpy::{PyArray1, PyArray2, PyArray3};
 use pyo3::exceptions::{PyIndexError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
+use pyo3::types::{PyDict, PySlice, PySliceMethods, PyTuple};
 
 use crate::arrays::tum_array;
+use crate::camera::PyCamera;
 use crate::eval::ate_dict;
 use crate::settings::{EngineSettings, Kwargs, type_name};
-use crate::tracker::{PyCamera, counters_dict, poses_array, state_name};
+use crate::tracker::{counters_dict, poses_array, state_name};
 
 /// Decoded frames the reader thread keeps ahead of the pipeline (as `ecvo run`).
 const PREFETCH: usize = 4;
@@ -53,34 +55,46 @@ fn open(
         .every_nth(frame_step))
 }
 
-/// A recorded RGB-D sequence: a sequence of `(timestamp, intensity, depth)` frames.
+/// A recorded RGB-D sequence (read_sequence): seq[i] decodes frame i as
+/// (timestamp, intensity, depth): intensity (height, width) uint8 grey, or (height,
+/// width, 3) uint8 RGB when opened with colour=True; depth (height, width) uint16
+/// raw units. seq[a:b:c] is a Sequence of those frames; iterating yields every
+/// frame in order, decoded when reached.
 #[pyclass(module = "ecvo._ecvo", name = "Sequence", frozen)]
 pub struct PySequence {
-    inner: Sequence,
-    len: usize,
+    inner: Arc<Sequence>,
+    /// The frames of `inner` this sequence holds, in order (a slice picks some).
+    indices: Vec<usize>,
+    /// Frames decode as colour `(H, W, 3)` RGB instead of grey.
+    colour: bool,
 }
 
-#[pymethods]
 impl PySequence {
-    fn __len__(&self) -> usize {
-        self.len
+    fn len(&self) -> usize {
+        self.indices.len()
     }
 
-    /// Frame `index` (negative counts from the end), decoded.
-    fn __getitem__<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyTuple>> {
-        let n = self.len as isize;
-        let k = if index < 0 { index + n } else { index };
-        if !(0..n).contains(&k) {
-            return Err(PyIndexError::new_err(format!(
-                "frame {index} is out of range for a sequence of {n} frames"
-            )));
-        }
-        let frame = py
-            .detach(|| self.inner.load_frame(k as usize))
-            .map_err(crate::io_err)?;
+    fn frame<'py>(&self, py: Python<'py>, k: usize) -> PyResult<Bound<'py, PyTuple>> {
+        let index = self.indices[k];
         let (h, w) = (self.inner.camera().height, self.inner.camera().width);
         let shape =
             |what: &str| PyRuntimeError::new_err(format!("decoded {what} has the wrong size"));
+        if self.colour {
+            let (t, rgb, depth) = py
+                .detach(|| self.inner.load_colour_frame(index))
+                .map_err(crate::io_err)?;
+            let rgb = Array3::from_shape_vec((h, w, 3), rgb).map_err(|_| shape("colour"))?;
+            let depth = Array2::from_shape_vec((h, w), depth).map_err(|_| shape("depth"))?;
+            return (
+                t,
+                PyArray3::from_owned_array(py, rgb),
+                PyArray2::from_owned_array(py, depth),
+            )
+                .into_pyobject(py);
+        }
+        let frame = py
+            .detach(|| self.inner.load_frame(index))
+            .map_err(crate::io_err)?;
         let intensity =
             Array2::from_shape_vec((h, w), frame.intensity).map_err(|_| shape("intensity"))?;
         let depth = Array2::from_shape_vec((h, w), frame.depth).map_err(|_| shape("depth"))?;
@@ -90,6 +104,51 @@ impl PySequence {
             PyArray2::from_owned_array(py, depth),
         )
             .into_pyobject(py)
+    }
+}
+
+#[pymethods]
+impl PySequence {
+    fn __len__(&self) -> usize {
+        self.len()
+    }
+
+    /// Frame `key` (negative counts from the end), decoded; a slice is a Sequence of
+    /// those frames (decoded when read).
+    fn __getitem__<'py>(
+        &self,
+        py: Python<'py>,
+        key: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        if let Ok(slice) = key.cast::<PySlice>() {
+            let ix = slice.indices(self.len() as isize)?;
+            let mut indices = Vec::with_capacity(ix.slicelength);
+            let mut i = ix.start;
+            for _ in 0..ix.slicelength {
+                indices.push(self.indices[i as usize]);
+                i += ix.step;
+            }
+            let sub = PySequence {
+                inner: self.inner.clone(),
+                indices,
+                colour: self.colour,
+            };
+            return Ok(Bound::new(py, sub)?.into_any());
+        }
+        let index: isize = key.extract().map_err(|_| {
+            PyTypeError::new_err(format!(
+                "Sequence indices must be integers or slices, not {}",
+                type_name(key)
+            ))
+        })?;
+        let n = self.len() as isize;
+        let k = if index < 0 { index + n } else { index };
+        if !(0..n).contains(&k) {
+            return Err(PyIndexError::new_err(format!(
+                "frame {index} is out of range for a sequence of {n} frames"
+            )));
+        }
+        Ok(self.frame(py, k as usize)?.into_any())
     }
 
     /// The frames in order, each decoded when it is reached.
@@ -108,14 +167,15 @@ impl PySequence {
         }
     }
 
-    /// The frames' timestamps.
+    /// The frames' timestamps (seconds).
     #[getter]
     fn timestamps<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         let t = self.inner.timestamps();
-        PyArray1::from_slice(py, &t[..self.len])
+        let picked: Vec<f64> = self.indices.iter().map(|&k| t[k]).collect();
+        PyArray1::from_vec(py, picked)
     }
 
-    /// The ground truth as an `(N, 8)` array of TUM rows, or None.
+    /// The whole recording's ground truth as (N, 8) TUM rows, or None.
     #[getter]
     fn groundtruth<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
         self.inner.groundtruth().map(|g| tum_array(py, g))
@@ -127,13 +187,20 @@ impl PySequence {
         self.inner.dir().to_path_buf()
     }
 
+    /// Whether frames decode as colour.
+    #[getter]
+    fn colour(&self) -> bool {
+        self.colour
+    }
+
     fn __repr__(&self) -> String {
         format!(
-            "Sequence({:?}, {} frames, {}x{})",
+            "Sequence({:?}, {} frames, {}x{}{})",
             self.inner.dir().display().to_string(),
-            self.len,
+            self.len(),
             self.inner.camera().width,
-            self.inner.camera().height
+            self.inner.camera().height,
+            if self.colour { ", colour" } else { "" }
         )
     }
 }
@@ -155,26 +222,35 @@ impl PySequenceIter {
         use std::sync::atomic::Ordering;
         let seq = self.sequence.get();
         let k = self.next.fetch_add(1, Ordering::Relaxed);
-        if k >= seq.len {
-            self.next.store(seq.len, Ordering::Relaxed);
+        if k >= seq.len() {
+            self.next.store(seq.len(), Ordering::Relaxed);
             return Ok(None);
         }
-        seq.__getitem__(py, k as isize).map(Some)
+        seq.frame(py, k).map(Some)
     }
 }
 
-/// Opens a recorded sequence (TUM layout with camera.json, or ICL-NUIM).
+/// Opens a TUM-layout (with camera.json) or ICL-NUIM sequence folder. camera (a
+/// Camera or a camera.json path) overrides the folder's; frame_step keeps frames 0,
+/// n, 2n, ...; max_frames the first so many; colour=True decodes intensity as
+/// (height, width, 3) RGB. A missing folder is a FileNotFoundError, a malformed one
+/// a ValueError.
 #[pyfunction]
-#[pyo3(signature = (path, camera = None, frame_step = 1, max_frames = None))]
+#[pyo3(signature = (path, camera = None, frame_step = 1, max_frames = None, colour = false))]
 pub fn read_sequence(
     path: PathBuf,
     camera: Option<&Bound<'_, PyAny>>,
     frame_step: usize,
     max_frames: Option<usize>,
+    colour: bool,
 ) -> PyResult<PySequence> {
     let inner = open(&path, camera_override(camera)?, frame_step)?;
     let len = max_frames.map_or(inner.len(), |m| m.min(inner.len()));
-    Ok(PySequence { inner, len })
+    Ok(PySequence {
+        inner: Arc::new(inner),
+        indices: (0..len).collect(),
+        colour,
+    })
 }
 
 /// What one run gave.
@@ -258,8 +334,10 @@ fn track(
     })
 }
 
-/// Tracks a recorded sequence as `ecvo run SEQ` does and returns a dict with the
-/// trajectory, the states, the counters and the ATE against the ground truth.
+/// Tracks a recorded sequence exactly as ``ecvo run`` does (the same settings
+/// give bit for bit the same poses): frames decoded ahead, the filter and tracker
+/// stages on ``threads`` threads; bit-identical repeated frames and non-increasing
+/// timestamps are skipped. Settings as for :class:`Tracker`.
 #[pyfunction]
 #[pyo3(signature = (path, preset = "pc", mode = "l2", camera = None, max_frames = None, threads = 2, frame_step = 1, **settings))]
 pub fn run_sequence<'py>(

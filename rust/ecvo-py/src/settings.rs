@@ -1,9 +1,12 @@
-//! The keyword settings of `Tracker(...)` and `run_sequence(...)` and how they become
-//! a [`Config`]: the same choices, names and order of application as `ecvo run`'s
-//! flags (`rust/ecvo-cli/src/settings.rs`), so that equal settings give equal poses.
+//! The keyword settings of `Tracker(...)` and `run_sequence(...)`: parsed into
+//! [`ecvo_settings::Settings`], which the CLI's flags and the JNI's init arguments
+//! are parsed into too and which alone turns them into a [`Config`], so that equal
+//! settings give equal poses.
 
-use ecvo_core::config::parse_levels;
-use ecvo_core::{Camera, Config, DepthNoiseModel, Mode, MotionPrior, Preset, Weighting};
+use ecvo_core::{
+    Camera, Config, DepthNoiseModel, LookupDepth, Mode, MotionPrior, Preset, Weighting,
+};
+use ecvo_settings::{Settings, SettingsError};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -30,64 +33,30 @@ pub const ENGINE_KEYS: &[&str] = &[
     "tracking",
     "keyframe_overlap",
     "keyframe_spread",
+    "lookup_depth",
+    "keyframe_fuse_every",
+    "memory_budget",
 ];
 
-/// How the engine is configured, beyond the camera.
+/// How the engine is configured, beyond the camera: [`Settings`], the one set of
+/// settings the CLI, this package and the JNI turn into a [`Config`] the same way.
 #[derive(Clone, Debug)]
-pub struct EngineSettings {
-    pub preset: Preset,
-    pub mode: Mode,
-    pub levels: Option<String>,
-    pub bilateral: bool,
-    pub normal_filter: bool,
-    pub contour_filter: bool,
-    pub paper: bool,
-    pub schedule: Option<String>,
-    pub point_budget: Option<String>,
-    pub weighting: Option<(Weighting, Option<Weighting>)>,
-    pub depth_noise: Option<DepthNoiseModel>,
-    pub prior: Option<MotionPrior>,
-    pub max_correction_distance: Option<f64>,
-    pub max_fine_depth_weight: Option<f64>,
-    pub min_predicted_decrease: Option<f64>,
-    pub min_update_px: Option<f64>,
-    pub scale_passes: Option<usize>,
-    pub fuse_corrections: Option<bool>,
-    pub refine_every: Option<u32>,
-    pub keyframes: Option<bool>,
-    pub keyframe_min_overlap: Option<f64>,
-    pub keyframe_max_spread_growth: Option<f64>,
-}
+pub struct EngineSettings(pub Settings);
 
 /// Parses `preset` / `mode` names.
 pub fn parse_preset(name: &str) -> PyResult<Preset> {
-    match name {
-        "pc" => Ok(Preset::Pc),
-        "phone" => Ok(Preset::Phone),
-        _ => Err(PyValueError::new_err(format!(
-            "preset must be \"pc\" or \"phone\", got {name:?}"
-        ))),
-    }
+    ecvo_settings::parse_preset(name).ok_or_else(|| {
+        PyValueError::new_err(format!("preset must be \"pc\" or \"phone\", got {name:?}"))
+    })
 }
 
 /// Parses a mode name.
 pub fn parse_mode(name: &str) -> PyResult<Mode> {
-    match name {
-        "naive" => Ok(Mode::Naive),
-        "l1" => Ok(Mode::L1),
-        "l2" => Ok(Mode::L2),
-        _ => Err(PyValueError::new_err(format!(
+    ecvo_settings::parse_mode(name).ok_or_else(|| {
+        PyValueError::new_err(format!(
             "mode must be \"naive\", \"l1\" or \"l2\", got {name:?}"
-        ))),
-    }
-}
-
-fn mode_name(mode: Mode) -> &'static str {
-    match mode {
-        Mode::Naive => "naive",
-        Mode::L1 => "l1",
-        Mode::L2 => "l2",
-    }
+        ))
+    })
 }
 
 /// Keyword arguments, taken one by one; what is left at the end is an error.
@@ -196,7 +165,7 @@ impl EngineSettings {
         let flag = |kw: &mut Kwargs<'_>, key: &str| -> PyResult<bool> {
             Ok(kw.take::<bool>(key, "a bool")?.unwrap_or(true))
         };
-        Ok(EngineSettings {
+        Ok(EngineSettings(Settings {
             preset: parse_preset(preset)?,
             mode: parse_mode(mode)?,
             levels: kw.take("levels", "a str such as \"30mm:7deg,120mm:12deg\"")?,
@@ -242,98 +211,39 @@ impl EngineSettings {
             keyframes: choice(kw, "tracking", &[("chain", false), ("keyframe", true)])?,
             keyframe_min_overlap: take_f64(kw, "keyframe_overlap")?,
             keyframe_max_spread_growth: take_f64(kw, "keyframe_spread")?,
-        })
+            lookup_depth: choice(
+                kw,
+                "lookup_depth",
+                &[
+                    ("filtered", LookupDepth::Filtered),
+                    ("raw", LookupDepth::Raw),
+                    ("bilateral", LookupDepth::Bilateral),
+                ],
+            )?,
+            keyframe_fuse_every: kw.take("keyframe_fuse_every", "an int >= 0")?,
+            memory_budget: kw.take("memory_budget", "an int (bytes)")?,
+        }))
     }
 
-    /// The tracker configuration for `camera`, built in the order `ecvo run` builds
-    /// it; an invalid setting is a ValueError naming it.
+    /// The tracker configuration for `camera` ([`Settings::config`]); an invalid
+    /// setting is a ValueError naming it.
     pub fn config(&self, camera: Camera) -> PyResult<Config> {
-        let bad = |key: &str, e: ecvo_core::Error| PyValueError::new_err(format!("{key}: {e}"));
-        let mut config = if self.paper {
-            Config::paper(camera, self.preset, Mode::L2)
-        } else {
-            Config::new(camera, self.preset, Mode::L2)
-        };
-        if let Some(name) = &self.schedule {
-            config.motion.levels =
-                ecvo_core::parse_schedule(name, &camera).map_err(|e| bad("schedule", e))?;
-        }
-        if let Some(text) = &self.point_budget {
-            let budgets =
-                ecvo_core::parse_point_budget(text).map_err(|e| bad("point_budget", e))?;
-            for (level, points) in budgets {
-                config.motion.set_point_budget(level, points);
+        self.0.config(camera).map_err(|e| match e {
+            SettingsError::Parse { key, source, .. } => {
+                PyValueError::new_err(format!("{key}: {source}"))
             }
-        }
-        if let Some((w, fine)) = self.weighting {
-            config.motion.weighting = w;
-            config.motion.fine_weighting = fine;
-        }
-        if let Some(d) = self.depth_noise {
-            config.motion.depth_noise = d;
-        }
-        if let Some(p) = self.prior {
-            config.motion.prior = p;
-        }
-        if let Some(d) = self.max_correction_distance {
-            config.max_correction_distance = d;
-        }
-        if let Some(d) = self.min_predicted_decrease {
-            config.motion.min_predicted_decrease = d;
-        }
-        if let Some(d) = self.min_update_px {
-            config.motion.min_update_px = d;
-        }
-        if let Some(n) = self.scale_passes {
-            config.motion.scale_passes_per_update = n;
-        }
-        if let Some(d) = self.max_fine_depth_weight {
-            config.motion.max_fine_depth_weight = d;
-        }
-        if let Some(f) = self.fuse_corrections {
-            config.fuse_corrections = f;
-        }
-        if let Some(n) = self.refine_every {
-            config.refine_every = n;
-        }
-        if let Some(k) = self.keyframes {
-            config.keyframes = k;
-        }
-        if let Some(f) = self.keyframe_min_overlap {
-            config.keyframe_min_overlap = f;
-        }
-        if let Some(f) = self.keyframe_max_spread_growth {
-            config.keyframe_max_spread_growth = f;
-        }
-        if let Some(text) = &self.levels {
-            config.reference_levels = parse_levels(text).map_err(|e| bad("levels", e))?;
-        }
-        let available = config.reference_levels.len();
-        let keep = match self.mode {
-            Mode::Naive => 0,
-            Mode::L1 => 1,
-            Mode::L2 => available.max(2),
-        };
-        if keep > available {
-            return Err(PyValueError::new_err(format!(
-                "mode {:?} needs at least {keep} reference level(s) but levels {:?} gives {available}",
-                mode_name(self.mode),
-                self.levels.as_deref().unwrap_or_default()
-            )));
-        }
-        config.reference_levels.truncate(keep);
-        if !self.bilateral {
-            config.filter.bilateral = None;
-        }
-        if !self.normal_filter {
-            config.filter.normal_max_angle_deg = None;
-        }
-        if !self.contour_filter {
-            config.filter.contour_angle_deg = None;
-        }
-        config
-            .validate()
-            .map_err(|e| PyValueError::new_err(format!("invalid tracker configuration: {e}")))?;
-        Ok(config)
+            SettingsError::TooFewLevels {
+                mode,
+                needed,
+                levels,
+                available,
+            } => PyValueError::new_err(format!(
+                "mode {mode:?} needs at least {needed} reference level(s) but levels \
+                 {levels:?} gives {available}"
+            )),
+            SettingsError::Invalid(e) => {
+                PyValueError::new_err(format!("invalid tracker configuration: {e}"))
+            }
+        })
     }
 }

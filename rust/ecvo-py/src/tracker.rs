@@ -1,110 +1,22 @@
-//! `ecvo.Camera` and `ecvo.Tracker`: the sequential engine ([`Odometry`]) behind a
+//! `ecvo.Tracker`: the sequential engine ([`Odometry`]) behind a
 //! push-a-frame, get-a-pose API, the GIL released while it tracks.
 
+use std::sync::{Mutex, MutexGuard, TryLockError};
 use std::time::Instant;
 
-use ecvo_core::{Counters, FrameView, Odometry, TrackingState};
+use ecvo_core::nalgebra::{Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use ecvo_core::{Config, Counters, FrameView, Odometry, Pose, TrackingState};
 use ecvo_io::Trajectory;
-use numpy::{PyArray1, PyArray2};
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
+use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::arrays::{plane, pose_array, row_major, tum_array};
+use crate::arrays::{plane, tum_array};
+use crate::camera::PyCamera;
+use crate::input::{self, Channels};
+use crate::result::PyFrameResult;
 use crate::settings::{EngineSettings, Kwargs};
-
-/// Pinhole intrinsics and depth units of an RGB-D stream whose intensity is
-/// registered to its depth.
-#[pyclass(module = "ecvo._ecvo", name = "Camera", frozen, eq, from_py_object)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PyCamera {
-    pub inner: ecvo_core::Camera,
-}
-
-#[pymethods]
-impl PyCamera {
-    #[new]
-    #[pyo3(signature = (width, height, fx, fy, cx, cy, depth_scale))]
-    fn new(
-        width: i64,
-        height: i64,
-        fx: f64,
-        fy: f64,
-        cx: f64,
-        cy: f64,
-        depth_scale: f64,
-    ) -> PyResult<Self> {
-        if width <= 0 || height <= 0 {
-            return Err(PyValueError::new_err(format!(
-                "Camera: width and height must be positive, got {width}x{height}"
-            )));
-        }
-        let inner = ecvo_core::Camera {
-            width: width as usize,
-            height: height as usize,
-            fx,
-            fy,
-            cx,
-            cy,
-            depth_scale,
-        };
-        inner
-            .validate()
-            .map_err(|e| PyValueError::new_err(format!("Camera: {e}")))?;
-        Ok(PyCamera { inner })
-    }
-
-    /// Reads a `camera.json` file (the format `ecvo` sequences carry).
-    #[staticmethod]
-    fn from_json(path: std::path::PathBuf) -> PyResult<Self> {
-        let inner = ecvo_io::load_camera_json(&path).map_err(crate::io_err)?;
-        Ok(PyCamera { inner })
-    }
-
-    #[getter]
-    fn width(&self) -> usize {
-        self.inner.width
-    }
-    #[getter]
-    fn height(&self) -> usize {
-        self.inner.height
-    }
-    #[getter]
-    fn fx(&self) -> f64 {
-        self.inner.fx
-    }
-    #[getter]
-    fn fy(&self) -> f64 {
-        self.inner.fy
-    }
-    #[getter]
-    fn cx(&self) -> f64 {
-        self.inner.cx
-    }
-    #[getter]
-    fn cy(&self) -> f64 {
-        self.inner.cy
-    }
-    #[getter]
-    fn depth_scale(&self) -> f64 {
-        self.inner.depth_scale
-    }
-
-    /// The 3x3 intrinsic matrix K.
-    fn intrinsic_matrix<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let c = &self.inner;
-        let k = numpy::ndarray::arr2(&[[c.fx, 0.0, c.cx], [0.0, c.fy, c.cy], [0.0, 0.0, 1.0]]);
-        PyArray2::from_owned_array(py, k)
-    }
-
-    fn __repr__(&self) -> String {
-        let c = &self.inner;
-        format!(
-            "Camera(width={}, height={}, fx={:?}, fy={:?}, cx={:?}, cy={:?}, depth_scale={:?})",
-            c.width, c.height, c.fx, c.fy, c.cx, c.cy, c.depth_scale
-        )
-    }
-}
 
 /// Name of a tracking state as Python sees it.
 pub fn state_name(s: TrackingState) -> &'static str {
@@ -174,10 +86,12 @@ fn camera_arg(obj: &Bound<'_, PyAny>) -> PyResult<ecvo_core::Camera> {
     })
 }
 
-/// Frame-to-frame RGB-D tracking with multi-level error correction.
-#[pyclass(module = "ecvo._ecvo", name = "Tracker")]
-pub struct PyTracker {
-    odo: Odometry,
+/// What a tracker holds; behind a lock so that a second thread gets a clear error.
+struct Inner {
+    /// None once closed.
+    odo: Option<Odometry>,
+    /// The configuration it was made with (for `reset`).
+    config: Config,
     camera: ecvo_core::Camera,
     pool: Option<rayon::ThreadPool>,
     trajectory: Trajectory,
@@ -185,6 +99,97 @@ pub struct PyTracker {
     scratch_intensity: Vec<u8>,
     scratch_depth: Vec<u16>,
     last_engine_s: f64,
+}
+
+impl Inner {
+    fn odo(&mut self) -> PyResult<&mut Odometry> {
+        self.odo
+            .as_mut()
+            .ok_or_else(|| PyValueError::new_err("the tracker is closed"))
+    }
+}
+
+/// Frame-to-frame RGB-D tracking with multi-level pose error correction (An et
+/// al., WACV 2018), frame by frame: Tracker(camera, preset="pc", mode="l2",
+/// threads=None, **settings).
+///
+/// preset picks the paper's thresholds and filter angles ("pc": Table 1, "phone":
+/// Table 2); mode which correction levels run ("naive", "l1", "l2"). threads sizes
+/// a private thread pool for the engine's inner loops (None: the process-wide
+/// pool). The other settings are the flags of ecvo run with underscores: levels
+/// ("30mm:7deg,120mm:12deg"), bilateral, normal_filter, contour_filter (bools,
+/// default True), paper (bool), schedule, point_budget (str), weighting ("scalar",
+/// "bivariate", "hybrid"), depth_noise ("constant", "quadratic", "fitted": the
+/// default), prior ("identity", "velocity"), max_correction_distance,
+/// max_fine_depth_weight, min_predicted_decrease, min_update_px (floats),
+/// scale_passes, refine_every (ints), corrections ("fuse", "replace"), tracking
+/// ("chain", "keyframe"), keyframe_overlap, keyframe_spread (floats), memory_budget
+/// (int, bytes: the engine refuses a configuration that needs more). An unknown
+/// keyword is a TypeError, a bad value a ValueError.
+///
+/// One tracker serves one thread at a time (another thread calling it meanwhile
+/// gets a RuntimeError saying so); several trackers run in parallel on several
+/// threads (the GIL is released while a frame is tracked). close() or a with block
+/// frees its memory.
+#[pyclass(module = "ecvo._ecvo", name = "Tracker", frozen)]
+pub struct PyTracker {
+    inner: Mutex<Inner>,
+}
+
+impl PyTracker {
+    /// The tracker's state, or a RuntimeError when another thread is using it.
+    fn lock(&self) -> PyResult<MutexGuard<'_, Inner>> {
+        match self.inner.try_lock() {
+            Ok(g) => Ok(g),
+            Err(TryLockError::Poisoned(p)) => Ok(p.into_inner()),
+            Err(TryLockError::WouldBlock) => Err(PyRuntimeError::new_err(
+                "this Tracker is in use by another thread: a Tracker serves one thread at \
+                 a time (give each thread its own Tracker, or guard it with a \
+                 threading.Lock)",
+            )),
+        }
+    }
+}
+
+/// A pose from a 4x4 (rigid) or the rotation of a 3x3 array-like, checked.
+fn rigid(obj: &Bound<'_, PyAny>, name: &str, rotation_only: bool) -> PyResult<Pose> {
+    let n = if rotation_only { 3 } else { 4 };
+    let arr = obj
+        .py()
+        .import("numpy")?
+        .call_method1("asarray", (obj, "float64"))
+        .map_err(|_| PyTypeError::new_err(format!("{name} must be a {n}x{n} array of floats")))?;
+    let arr: PyReadonlyArray2<'_, f64> = arr
+        .extract()
+        .map_err(|_| PyValueError::new_err(format!("{name} must be a {n}x{n} array")))?;
+    let a = arr.as_array();
+    if a.shape() != [n, n] || a.iter().any(|x| !x.is_finite()) {
+        return Err(PyValueError::new_err(format!(
+            "{name} must be a {n}x{n} array of finite floats, got shape {:?}",
+            a.shape()
+        )));
+    }
+    let r = Matrix3::from_fn(|i, j| a[(i, j)]);
+    let orthonormal = (r.transpose() * r - Matrix3::identity()).abs().max() < 1e-6;
+    if !orthonormal || r.determinant() < 0.0 {
+        return Err(PyValueError::new_err(format!(
+            "{name}: the rotation part is not a rotation (RᵀR ≠ I or det R < 0)"
+        )));
+    }
+    if !rotation_only
+        && (a[(3, 0)] != 0.0 || a[(3, 1)] != 0.0 || a[(3, 2)] != 0.0 || a[(3, 3)] != 1.0)
+    {
+        return Err(PyValueError::new_err(format!(
+            "{name}: the last row must be [0, 0, 0, 1]"
+        )));
+    }
+    let t = if rotation_only {
+        Vector3::zeros()
+    } else {
+        Vector3::new(a[(0, 3)], a[(1, 3)], a[(2, 3)])
+    };
+    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
+    Ok(Pose::from_parts(Translation3::from(t), q))
 }
 
 #[pymethods]
@@ -203,32 +208,91 @@ impl PyTracker {
         let engine = EngineSettings::from_kwargs(preset, mode, &mut kw)?;
         kw.finish()?;
         let config = engine.config(camera)?;
-        let odo = Odometry::new(config)
-            .map_err(|e| PyValueError::new_err(format!("invalid tracker configuration: {e}")))?;
+        let odo = Odometry::new(config.clone()).map_err(|e| {
+            let hint = match e {
+                ecvo_core::Error::MemoryBudget { .. } => {
+                    "; Tracker(..., memory_budget=BYTES) sets the budget"
+                }
+                _ => "",
+            };
+            PyValueError::new_err(format!("invalid tracker configuration: {e}{hint}"))
+        })?;
         Ok(PyTracker {
-            odo,
-            camera,
-            pool: thread_pool(threads)?,
-            trajectory: Trajectory::new(),
-            states: Vec::new(),
-            scratch_intensity: Vec::new(),
-            scratch_depth: Vec::new(),
-            last_engine_s: f64::NAN,
+            inner: Mutex::new(Inner {
+                odo: Some(odo),
+                config,
+                camera,
+                pool: thread_pool(threads)?,
+                trajectory: Trajectory::new(),
+                states: Vec::new(),
+                scratch_intensity: Vec::new(),
+                scratch_depth: Vec::new(),
+                last_engine_s: f64::NAN,
+            }),
         })
     }
 
-    /// Tracks one frame; returns `(pose, state)`.
+    /// Tracks one frame and returns its FrameResult (which unpacks as (pose,
+    /// state)). Timestamps (seconds) must increase.
+    ///
+    /// intensity: grey (height, width) uint8; colour (height, width, 3 or 4) uint8 in
+    /// the channel order channels ("rgb" or "bgr"; alpha ignored), converted to grey
+    /// as 0.299 R + 0.587 G + 0.114 B rounded (as read_sequence); or grey float32 /
+    /// float64 in [0, 1] (Open3D's RGBDImage.color). depth: uint16 raw units (0: no
+    /// measurement) or float32 / float64 metres (NaN or 0: no measurement), rounded
+    /// to the camera's units (1 / depth_scale m; exact for metres that came from raw
+    /// / depth_scale). Any object numpy.asarray takes works (the buffer protocol:
+    /// open3d.geometry.Image, memoryview); an object with .color and .depth (an
+    /// Open3D RGBDImage) may stand for both planes. A masked array's masked pixels
+    /// have no depth. C-contiguous uint8 grey and uint16 depth are read in place,
+    /// everything else converted once into a reused buffer; the arrays must not be
+    /// written by another thread during the call.
+    ///
+    /// initial_guess: a 4x4 camera-to-world pose guess for this frame (as the poses
+    /// returned), or rotation_guess: a 3x3 rotation of this camera relative to the
+    /// previous frame's (a gyroscope's), the translation then predicted from the
+    /// velocity. Registration starts from the identity and from the guess, and the
+    /// better start wins at the coarsest level; ignored on the first frame.
+    ///
+    /// A wrong type or dtype is a TypeError; a wrong shape, an out-of-range value,
+    /// a non-increasing timestamp or a closed tracker a ValueError.
+    #[pyo3(signature = (timestamp, intensity, depth = None, channels = "rgb", initial_guess = None, rotation_guess = None))]
     fn push<'py>(
-        mut slf: PyRefMut<'py, Self>,
+        &self,
+        py: Python<'py>,
         timestamp: f64,
         intensity: &Bound<'py, PyAny>,
-        depth: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyTuple>> {
-        let py = slf.py();
-        let this = &mut *slf;
+        depth: Option<&Bound<'py, PyAny>>,
+        channels: &str,
+        initial_guess: Option<&Bound<'py, PyAny>>,
+        rotation_guess: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<PyFrameResult> {
+        let mut guard = self.lock()?;
+        let this = &mut *guard;
+        this.odo()?;
+        let channels = Channels::parse(channels)?;
+        // An RGBDImage (Open3D) carries both planes.
+        let (intensity, depth) = match depth {
+            Some(d) => (intensity.clone(), d.clone()),
+            None if intensity.hasattr("color")? && intensity.hasattr("depth")? => {
+                (intensity.getattr("color")?, intensity.getattr("depth")?)
+            }
+            None => {
+                return Err(PyTypeError::new_err(
+                    "push() needs depth (or an RGBDImage-like object with .color and .depth)",
+                ));
+            }
+        };
         let (h, w) = (this.camera.height, this.camera.width);
-        let i = plane::<u8>(intensity, "intensity", "uint8", h, w)?;
-        let d = plane::<u16>(depth, "depth", "uint16", h, w)?;
+        let (i, mask) = input::intensity(&intensity, channels, h, w, &mut this.scratch_intensity)?;
+        let d = input::depth(
+            &depth,
+            this.camera.depth_scale,
+            h,
+            w,
+            mask,
+            &mut this.scratch_depth,
+        )?;
         if !timestamp.is_finite() {
             return Err(PyValueError::new_err(format!(
                 "timestamp must be finite, got {timestamp}"
@@ -242,12 +306,35 @@ impl PyTracker {
                 )));
             }
         }
+        let guess = match (initial_guess, rotation_guess) {
+            (Some(_), Some(_)) => {
+                return Err(PyValueError::new_err(
+                    "give initial_guess or rotation_guess, not both",
+                ));
+            }
+            (Some(g), None) => Some((rigid(g, "initial_guess", false)?, false)),
+            (None, Some(r)) => Some((rigid(r, "rotation_guess", true)?, true)),
+            (None, None) => None,
+        };
+        let odo = this.odo.as_mut().expect("checked above");
+        if let (Some((g, rotation_only)), Some(prev)) = (guess, odo.tracker().previous()) {
+            let motion = if rotation_only {
+                // The rotation from the outside, the translation from the prediction.
+                let t = odo
+                    .tracker()
+                    .prior_for(timestamp)
+                    .map_or(Translation3::identity(), |p| p.translation);
+                Pose::from_parts(t, g.rotation)
+            } else {
+                prev.pose.inverse() * g
+            };
+            odo.set_guess(motion);
+        }
         let view = FrameView {
             timestamp,
-            intensity: row_major(&i, &mut this.scratch_intensity),
-            depth: row_major(&d, &mut this.scratch_depth),
+            intensity: i.values(&mut this.scratch_intensity),
+            depth: d.values(&mut this.scratch_depth),
         };
-        let odo = &mut this.odo;
         let pool = this.pool.as_ref();
         let (out, engine_s) = py.detach(|| {
             in_pool(pool, || {
@@ -260,70 +347,116 @@ impl PyTracker {
         this.last_engine_s = engine_s;
         this.trajectory.push(out.timestamp, out.pose);
         this.states.push(out.state);
-        let pose = pose_array(py, &out.pose);
-        (pose, state_name(out.state)).into_pyobject(py)
+        Ok(PyFrameResult::new(py, &out))
     }
 
-    /// New intrinsics of the same image size for the frames pushed from now on.
-    fn set_intrinsics(&mut self, camera: &Bound<'_, PyAny>) -> PyResult<()> {
+    /// New intrinsics of the same image size (a zoom) for the frames pushed from
+    /// now on.
+    fn set_intrinsics(&self, camera: &Bound<'_, PyAny>) -> PyResult<()> {
         let camera = camera_arg(camera)?;
+        let mut this = self.lock()?;
         camera
-            .validate_change_from(&self.camera)
+            .validate_change_from(&this.camera)
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        self.odo
+        this.odo()?
             .set_intrinsics(camera)
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        self.camera = camera;
+        this.camera = camera;
         Ok(())
     }
 
-    /// The poses so far as an `(N, 8)` array of TUM rows.
-    fn trajectory<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        tum_array(py, &self.trajectory)
+    /// Forgets every frame: the next one starts a new trajectory at the identity,
+    /// with the same settings and the current camera. Reopens a closed tracker.
+    fn reset(&self) -> PyResult<()> {
+        let mut this = self.lock()?;
+        this.odo = None;
+        let mut config = this.config.clone();
+        config.camera = this.camera;
+        this.odo = Some(Odometry::new(config).map_err(|e| PyValueError::new_err(e.to_string()))?);
+        this.trajectory = Trajectory::new();
+        this.states.clear();
+        this.last_engine_s = f64::NAN;
+        Ok(())
     }
 
-    /// The poses so far as an `(N, 4, 4)` array.
-    fn poses<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray3<f64>> {
-        poses_array(py, &self.trajectory)
+    /// Frees the engine's memory; pushing afterwards is a ValueError. The
+    /// trajectory stays readable. Idempotent.
+    fn close(&self) -> PyResult<()> {
+        let mut this = self.lock()?;
+        this.odo = None;
+        this.scratch_intensity = Vec::new();
+        this.scratch_depth = Vec::new();
+        Ok(())
     }
 
-    /// The timestamps so far.
-    fn timestamps<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.trajectory.stamps)
+    /// True once closed.
+    #[getter]
+    fn closed(&self) -> PyResult<bool> {
+        Ok(self.lock()?.odo.is_none())
+    }
+
+    fn __enter__(slf: Py<Self>) -> Py<Self> {
+        slf
+    }
+
+    #[pyo3(signature = (*_args))]
+    fn __exit__(&self, _args: &Bound<'_, PyTuple>) -> PyResult<bool> {
+        self.close()?;
+        Ok(false)
+    }
+
+    /// The poses so far as an (N, 8) float64 array of TUM rows [t, tx, ty, tz, qx,
+    /// qy, qz, qw].
+    fn trajectory<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        Ok(tum_array(py, &self.lock()?.trajectory))
+    }
+
+    /// The poses so far as an (N, 4, 4) float64 array.
+    fn poses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, numpy::PyArray3<f64>>> {
+        Ok(poses_array(py, &self.lock()?.trajectory))
+    }
+
+    /// The timestamps so far (seconds).
+    fn timestamps<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        Ok(PyArray1::from_slice(py, &self.lock()?.trajectory.stamps))
     }
 
     /// Every frame's state so far.
-    fn states(&self) -> Vec<&'static str> {
-        self.states.iter().map(|s| state_name(*s)).collect()
+    fn states(&self) -> PyResult<Vec<&'static str>> {
+        Ok(self.lock()?.states.iter().map(|s| state_name(*s)).collect())
     }
 
-    /// The tracker's counters.
+    /// The tracker's counters (the paper's Table 1 and what went wrong).
     fn counters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        counters_dict(py, self.odo.tracker().counters())
+        let mut this = self.lock()?;
+        counters_dict(py, this.odo()?.tracker().counters())
     }
 
-    /// The current state.
+    /// The state after the last frame ("initialising" before the first).
     #[getter]
-    fn state(&self) -> &'static str {
-        state_name(self.odo.tracker().state())
+    fn state(&self) -> PyResult<&'static str> {
+        let mut this = self.lock()?;
+        Ok(state_name(this.odo()?.tracker().state()))
     }
 
     /// The camera of the frames pushed next.
     #[getter]
-    fn camera(&self) -> PyCamera {
-        PyCamera { inner: self.camera }
+    fn camera(&self) -> PyResult<PyCamera> {
+        Ok(PyCamera {
+            inner: self.lock()?.camera,
+        })
     }
 
-    fn __len__(&self) -> usize {
-        self.trajectory.len()
+    fn __len__(&self) -> PyResult<usize> {
+        Ok(self.lock()?.trajectory.len())
     }
 
-    /// Seconds the engine itself (`Odometry::push`, timed in Rust) took over the last
-    /// push: what `Tracker.push` costs beyond it is the binding's
-    /// (`scripts/python/bench_push.py`).
+    /// Seconds the engine itself (Odometry::push, timed in Rust) took over the last
+    /// push: what Tracker.push costs beyond it is the binding's
+    /// (scripts/python/bench_push.py).
     #[getter]
-    fn _last_engine_s(&self) -> f64 {
-        self.last_engine_s
+    fn _last_engine_s(&self) -> PyResult<f64> {
+        Ok(self.lock()?.last_engine_s)
     }
 }
 
@@ -337,9 +470,8 @@ pub fn poses_array<'py>(py: Python<'py>, t: &Trajectory) -> Bound<'py, numpy::Py
     numpy::PyArray3::from_owned_array(py, arr)
 }
 
-/// The Rust engine's own cost per frame on frames already in memory: `Odometry::push`
-/// timed in Rust, for comparison with `Tracker.push` timed from Python
-/// (`scripts/python/bench_push.py`). Returns seconds per frame.
+/// Seconds per frame of the Rust engine's own Odometry::push on these frames
+/// (for scripts/python/bench_push.py).
 #[pyfunction]
 #[pyo3(signature = (camera, frames, preset = "pc", mode = "l2", threads = None, **settings))]
 pub fn _engine_push_times(

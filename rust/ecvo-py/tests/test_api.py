@@ -88,15 +88,22 @@ def test_missing_sequence_is_file_not_found(tmp_path):
 @pytest.mark.parametrize(
     "intensity, depth, exc, words",
     [
-        (np.zeros((180, 320), np.float32), None, TypeError, "intensity.*uint8.*float32"),
+        (np.zeros((180, 320), np.float16), None, TypeError, "intensity.*uint8.*float16"),
+        (np.full((180, 320), 1.5, np.float32), None, ValueError, r"intensity.*\[0, 1\].*1.5"),
+        (np.full((180, 320), np.nan, np.float32), None, ValueError, r"intensity.*\[0, 1\]"),
+        (np.zeros((180, 320, 3), np.float32), None, TypeError, "intensity.*dtype"),
         (None, np.zeros((180, 320), np.int32), TypeError, "depth.*uint16.*int32"),
         (None, np.zeros((180, 320), np.uint8), TypeError, "depth.*uint16"),
+        (None, np.full((180, 320), -1.0, np.float32), ValueError, "depth.*metres.*-1"),
+        (None, np.full((180, 320), np.inf, np.float32), ValueError, "depth.*metres.*inf"),
+        (None, np.full((180, 320), 70.0, np.float32), ValueError, r"depth.*65\.535.*70"),
         (np.zeros((180, 321), np.uint8), None, ValueError, r"intensity.*\(180, 320\).*\(180, 321\)"),
         (np.zeros((320, 180), np.uint8), None, ValueError, "intensity.*shape"),
-        (np.zeros((180, 320, 3), np.uint8), None, ValueError, "intensity.*shape"),
+        (np.zeros((180, 320, 2), np.uint8), None, ValueError, "intensity.*shape"),
         (None, np.zeros(180 * 320, np.uint16), ValueError, "depth.*shape"),
-        ([[0] * 320] * 180, None, TypeError, "intensity.*numpy.ndarray.*list"),
-        (None, b"\x00" * (2 * 180 * 320), TypeError, "depth.*numpy.ndarray.*bytes"),
+        ([[0] * 320] * 180, None, TypeError, "intensity.*dtype.*int64"),
+        (None, b"\x00" * (2 * 180 * 320), TypeError, "depth.*numpy.ndarray.*buffer protocol.*bytes"),
+        (object(), None, TypeError, "intensity.*numpy.ndarray.*object"),
     ],
 )
 def test_bad_frames_raise(intensity, depth, exc, words):
@@ -152,6 +159,8 @@ def test_bad_settings_raise(synth):
         ecvo.run_sequence(synth, threads=0)
     with pytest.raises(ValueError, match="frame_step"):
         ecvo.run_sequence(synth, frame_step=0)
+    with pytest.raises(TypeError, match="memory_budget must be an int"):
+        ecvo.Tracker(c, memory_budget="lots")
     with pytest.raises(TypeError, match="unexpected keyword argument"):
         ecvo.run_sequence(synth, out="/tmp")
 

@@ -30,3 +30,16 @@ def test_example_tracks_and_writes_the_trajectory(synth, tmp_path):
     for frame in seq:
         tracker.push(*frame)
     assert np.array_equal(written, tracker.trajectory())
+
+
+def test_inputs_and_quality_example_runs(synth):
+    example = EXAMPLE.parent / "inputs_and_quality.py"
+    p = subprocess.run(
+        [sys.executable, str(example), str(synth), "--max-frames", "30"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert p.returncode == 0, p.stderr
+    assert "30 frames, 29 odometry edges" in p.stdout and "ATE RMSE" in p.stdout
+    assert "lost" not in p.stderr

@@ -123,6 +123,7 @@ pub(super) fn motion_from<K: Loops>(
         steps: cfg.levels.len().min(MAX_STEPS),
         error: f64::NAN,
         valid_pixels: 0,
+        template_points: 0,
         information: Matrix6::zeros(),
         scale: None,
         start: 0,
@@ -173,6 +174,7 @@ pub(super) fn motion_from<K: Loops>(
         };
         let start = if fine_level.is_some() { None } else { scale };
         lp.load(&template.points);
+        result.template_points = template.points.len();
         let out = if k == 0 && inits.len() > 1 {
             let (best, out) = best_start(
                 lp,

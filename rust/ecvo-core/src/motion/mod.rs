@@ -97,6 +97,8 @@ pub struct MotionResult {
     pub error: f64,
     /// Valid residuals at the finest step.
     pub valid_pixels: usize,
+    /// Template points of the finest step run (`valid_pixels` of them were used).
+    pub template_points: usize,
     /// `JᵀWJ` at the finest step, whitened by the estimated scale: the information
     /// matrix of the twist `[v; ω]` of the left perturbation of `T_{j→i}`.
     pub information: Matrix6<f64>,

@@ -60,6 +60,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
                 }
                 self.counters.recovered_frames += 1;
                 out.recovered = true;
+                out.registration = Some(r);
                 return Some(pose);
             }
         }

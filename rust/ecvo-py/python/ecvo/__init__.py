@@ -6,10 +6,10 @@ with multi-level pose error correction, written in Rust.
 
     import ecvo
     seq = ecvo.read_sequence("testdata/synth_phone_320x180")
-    tracker = ecvo.Tracker(seq.camera, preset="pc", mode="l2")
-    for timestamp, intensity, depth in seq:
-        pose, state = tracker.push(timestamp, intensity, depth)
-    print(ecvo.ate(seq.groundtruth, tracker.trajectory())["rmse"])
+    with ecvo.Tracker(seq.camera, preset="pc", mode="l2") as tracker:
+        for timestamp, intensity, depth in seq:
+            r = tracker.push(timestamp, intensity, depth)  # r.pose, r.state, r.information
+        print(ecvo.ate(seq.groundtruth, tracker.trajectory())["rmse"])
 
 or, exactly as ``ecvo run`` tracks it (bit for bit the same poses):
 
@@ -25,11 +25,12 @@ import os as _os
 import numpy as _np
 
 from . import _ecvo
-from ._ecvo import Camera, Sequence, Tracker, read_sequence, run_sequence
+from ._ecvo import Camera, FrameResult, Sequence, Tracker, read_sequence, run_sequence
 
 __version__ = _ecvo.__version__
 __all__ = [
     "Camera",
+    "FrameResult",
     "Sequence",
     "Tracker",
     "ate",
@@ -38,14 +39,15 @@ __all__ = [
 ]
 
 
-def ate(gt, est, max_dt=0.02):
+def ate(gt, est, max_dt=0.01):
     """Absolute trajectory error of ``est`` against ``gt``, as ``ecvo eval``, TUM's
     ``evaluate_ate.py`` and ``evo_ape tum GT EST -a`` compute it.
 
     ``gt`` and ``est`` are TUM trajectory files (paths) or ``(N, 8)`` arrays of TUM
     rows ``[t, tx, ty, tz, qx, qy, qz, qw]`` (anything ``numpy.asarray`` turns into
     one, such as ``Tracker.trajectory()`` or ``Sequence.groundtruth``). Poses are
-    associated by timestamp (nearest, within ``max_dt`` seconds), the estimate is
+    associated by timestamp (nearest, within ``max_dt`` seconds: 0.01, evo's
+    ``t_max_diff`` default; ``ecvo eval`` and ``run_sequence`` use TUM's 0.02), the estimate is
     rigidly aligned to the ground truth (no scale), and the statistics of the position
     errors are returned as a dict: ``rmse``, ``mean``, ``median``, ``std``, ``min``,
     ``max`` (metres), ``count`` (pairs), ``alignment`` (4x4, ``gt ~ alignment @ est``)
