@@ -28,11 +28,15 @@ pub use crate::prior::{Velocity, predict};
 use crate::se3;
 use crate::spread::SpreadWatch;
 
+mod belief;
 mod frame_to_frame;
+use belief::{believable, plausible_speed};
 mod keyframe;
+mod output;
 mod recovery;
 pub use frame_to_frame::{frame_to_frame, working_motion};
 use keyframe::KeyframeStep;
+pub use output::{FrameOutput, TrackingState};
 
 /// `comp(T, (εd, εa))`: true when `‖t‖ > εd` or `tr(R) < 2 cos εa + 1`, i.e. when the
 /// motion since the reference calls for a correction (section 3.2).
@@ -40,92 +44,6 @@ pub fn comp(t: &Pose, level: &ReferenceLevel) -> bool {
     let trace = t.rotation.to_rotation_matrix().matrix().trace();
     t.translation.vector.norm() > level.max_distance_m
         || trace < 2.0 * level.max_angle_deg.to_radians().cos() + 1.0
-}
-
-/// Where the tracker stands.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TrackingState {
-    /// No frame yet.
-    Initialising,
-    /// The last frame registered.
-    Tracking,
-    /// The last frame did not register; its pose is the last good one.
-    Lost,
-}
-
-/// What the tracker says about one frame.
-#[derive(Clone, Copy, Debug)]
-pub struct FrameOutput {
-    /// Position of the frame in the stream, from 0.
-    pub index: u64,
-    /// Capture time in seconds.
-    pub timestamp: f64,
-    /// Camera-to-world pose; the world is the first camera. For a lost frame, the
-    /// last good pose.
-    pub pose: Pose,
-    /// Tracking or lost.
-    pub state: TrackingState,
-    /// The frame became the reference at levels `1..=reference_levels` (0: none).
-    pub reference_levels: u8,
-    /// `MOTION` calls spent on this frame.
-    pub motion_estimations: u32,
-    /// The frame-to-frame estimate `T_{c,p}` of box \[A\] (None for the first frame);
-    /// with keyframe tracking, the registration that gave the pose: against the
-    /// keyframe, or against the previous frame (when it is the keyframe, or after a
-    /// fall-back).
-    pub frame_to_frame: Option<MotionResult>,
-    /// After too many lost frames the tracker started afresh at this frame, keeping
-    /// the last good pose.
-    pub reanchored: bool,
-    /// \[A\] failed but the frame registered against a kept reference frame instead.
-    pub recovered: bool,
-    /// Corrections of this frame that failed or were rejected (it kept the pose it
-    /// had before each of them and did not become that level's reference).
-    pub refused_corrections: u8,
-    /// The registration the frame's pose came from before any correction: \[A\]
-    /// (with keyframe tracking the one that gave the pose), or the recovery against a
-    /// kept reference. None for the first frame, a re-anchored one and a lost one.
-    /// Its `information` (`JᵀWJ` in the tangent space of the registered motion),
-    /// `scale` and `valid_pixels / template_points` are the frame's quality.
-    pub registration: Option<MotionResult>,
-    /// Why the frame was lost (None unless [`TrackingState::Lost`]).
-    pub lost_reason: Option<LostReason>,
-}
-
-/// Slack on the speed check, metres: registration noise on a short interval.
-const SPEED_SLACK_M: f64 = 0.02;
-
-/// Whether a camera that moved by `motion` in `dt` seconds stays under `max_speed`
-/// (m/s). Without a usable interval (timestamps not increasing) nothing is refused.
-fn plausible_speed(motion: &Pose, dt: f64, max_speed: f64) -> bool {
-    !(dt > 0.0) || motion.translation.vector.norm() <= max_speed * dt + SPEED_SLACK_M
-}
-
-/// Whether a registration `r` (\[A\] or a recovery) by which the camera moved `moved`
-/// from the previous frame, `dt` seconds before, is believed: the speed stays under
-/// [`Config::max_speed_m_s`], and its intensity and depth residuals do not both spread
-/// more than [`Config::max_spread_jump`] times wider than the recent \[A\]s' (checked
-/// with bivariate weighting only, the one that estimates the two spreads apart). A
-/// refusal is counted (`implausible_motions`, `spread_jumps`).
-fn believable(
-    config: &Config,
-    spread: &SpreadWatch,
-    counters: &mut Counters,
-    r: &MotionResult,
-    moved: &Pose,
-    dt: f64,
-) -> bool {
-    if !plausible_speed(moved, dt, config.max_speed_m_s) {
-        counters.implausible_motions += 1;
-        return false;
-    }
-    let jumped = config.motion.weighting == Weighting::Bivariate
-        && r.scale
-            .is_some_and(|s| spread.is_jump(&s, config.max_spread_jump));
-    if jumped {
-        counters.spread_jumps += 1;
-    }
-    !jumped
 }
 
 /// After this many refused (failed or rejected) corrections in a row against the
