@@ -462,7 +462,8 @@ impl Config {
             fuse_corrections: true,
             refine_every: 3,
             keyframe_fuse_every: 0,
-            keyframes: true,
+            // The keyframe is the level-1 reference: naive tracking has none.
+            keyframes: used > 0,
             keyframe_min_overlap: 0.5,
             keyframe_max_spread_growth: f64::INFINITY,
             lookup_depth: LookupDepth::Bilateral,

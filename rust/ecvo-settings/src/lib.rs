@@ -275,6 +275,11 @@ impl Settings {
             });
         }
         config.reference_levels.truncate(keep);
+        if keep == 0 && self.keyframes.is_none() {
+            // Naive tracking has no reference, so no keyframe: the paper's chain
+            // (asking for keyframes with it stays an error of the config).
+            config.keyframes = false;
+        }
         if !self.bilateral {
             config.filter.bilateral = None;
         }

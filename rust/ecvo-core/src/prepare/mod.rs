@@ -503,6 +503,8 @@ impl Preparer {
         templates.resize_with(self.schedule.len(), Template::default);
         for (step, t) in self.schedule.iter().zip(templates.iter_mut()) {
             let l = step.pyramid_level;
+            // A frame made by `Default` (not `for_config`) learns its levels here.
+            t.pyramid_level = l;
             match step.max_points {
                 None => build_template(&self.planes[l], levels[l].camera(), step.stride, t),
                 Some(budget) => {

@@ -51,6 +51,15 @@ fn clipped_reference(
     out
 }
 
+/// The default configuration with every frame prepared whole (the chain's): what
+/// these tests compare.
+fn whole_config(c: Camera, preset: Preset, mode: Mode) -> Config {
+    Config {
+        keyframes: false,
+        ..Config::new(c, preset, mode)
+    }
+}
+
 fn camera(w: usize, h: usize) -> Camera {
     Camera {
         width: w,
@@ -72,13 +81,13 @@ fn blocked_bilateral_equals_the_clipped_filter_bit_for_bit() {
         (64, 9, 3, 0.05),
         (129, 17, 2, 0.35),
     ] {
-        let mut config = Config::new(camera(w, h), Preset::Pc, Mode::L2);
+        let mut config = whole_config(camera(w, h), Preset::Pc, Mode::L2);
         config.filter.bilateral = Some(BilateralConfig {
             radius: r,
             sigma_space_px: 1.5,
             sigma_depth_rel: sr,
         });
-        let spatial = Preparer::new(&config).spatial;
+        let spatial = Preparer::whole(&config).spatial;
         let mut seed = 12345u32;
         let raw: Vec<u16> = (0..w * h)
             .map(|i| {
@@ -177,21 +186,21 @@ fn fused_passes_equal_the_old_preparation_bit_for_bit() {
         };
         let mut configs = Vec::new();
         for preset in [Preset::Pc, Preset::Phone] {
-            configs.push(Config::new(c, preset, Mode::L2));
+            configs.push(whole_config(c, preset, Mode::L2));
         }
-        let mut no_filters = Config::new(c, Preset::Pc, Mode::L2);
+        let mut no_filters = whole_config(c, Preset::Pc, Mode::L2);
         no_filters.filter.bilateral = None;
         no_filters.filter.normal_max_angle_deg = None;
         configs.push(no_filters);
-        let mut contour_only = Config::new(c, Preset::Pc, Mode::L2);
+        let mut contour_only = whole_config(c, Preset::Pc, Mode::L2);
         contour_only.filter.normal_max_angle_deg = None;
         configs.push(contour_only);
-        let mut normal_only = Config::new(c, Preset::Phone, Mode::L2);
+        let mut normal_only = whole_config(c, Preset::Phone, Mode::L2);
         normal_only.filter.contour_angle_deg = None;
         configs.push(normal_only);
         for (k, config) in configs.iter().enumerate() {
             let mut old = OldPreparer::new(config);
-            let mut new = Preparer::new(config);
+            let mut new = Preparer::whole(config);
             // Reused outputs, as in a frame pool.
             let (mut want, mut got) = (PreparedFrame::default(), PreparedFrame::default());
             for i in [0, 5, 6] {
@@ -232,8 +241,8 @@ fn fused_passes_equal_the_old_preparation_on_small_random_frames() {
             depth_scale: 1000.0,
         };
         for preset in [Preset::Pc, Preset::Phone] {
-            let config = Config::new(c, preset, Mode::L2);
-            let (mut old, mut new) = (OldPreparer::new(&config), Preparer::new(&config));
+            let config = whole_config(c, preset, Mode::L2);
+            let (mut old, mut new) = (OldPreparer::new(&config), Preparer::whole(&config));
             let (mut want, mut got) = (PreparedFrame::default(), PreparedFrame::default());
             for k in 0..6 {
                 let intensity: Vec<u8> = (0..w * h).map(|_| (next() >> 24) as u8).collect();
@@ -291,7 +300,7 @@ fn poster_and_waves() -> (Camera, Vec<u8>, Vec<u16>) {
 }
 
 fn prepare(config: &Config, intensity: &[u8], depth: &[u16]) -> PreparedFrame {
-    let mut p = Preparer::new(config);
+    let mut p = Preparer::whole(config);
     let mut out = PreparedFrame::for_config(config);
     let view = FrameView {
         timestamp: 0.0,
@@ -303,7 +312,7 @@ fn prepare(config: &Config, intensity: &[u8], depth: &[u16]) -> PreparedFrame {
 }
 
 fn budgeted(c: Camera, budget: Option<usize>) -> Config {
-    let mut config = Config::new(c, Preset::Pc, Mode::L2);
+    let mut config = whole_config(c, Preset::Pc, Mode::L2);
     config.motion.set_point_budget(0, budget);
     config.motion.set_point_budget(1, budget);
     config
@@ -415,7 +424,7 @@ fn selection_is_deterministic_with_reused_buffers() {
     let config = budgeted(c, Some(700));
     let first = prepare(&config, &intensity, &depth);
     // A warm preparer and a reused output, with another frame in between.
-    let mut p = Preparer::new(&config);
+    let mut p = Preparer::whole(&config);
     let mut out = PreparedFrame::for_config(&config);
     let flat = vec![100u8; intensity.len()];
     for (i, d) in [(&flat, &depth), (&intensity, &depth)] {
@@ -455,11 +464,11 @@ fn an_untracked_level_gets_no_samples_and_changes_nothing_else() {
         cy: cam.cy,
         depth_scale: cam.depth_scale,
     };
-    let all = Config::new(c, Preset::Pc, Mode::L2);
+    let all = whole_config(c, Preset::Pc, Mode::L2);
     let mut coarse = all.clone();
     coarse.motion.levels = crate::parse_schedule("3/1/20,2/1/15,1/1/10", &c).unwrap();
     assert!(all.motion.levels.iter().any(|l| l.pyramid_level == 0));
-    let (mut pa, mut pc) = (Preparer::new(&all), Preparer::new(&coarse));
+    let (mut pa, mut pc) = (Preparer::whole(&all), Preparer::whole(&coarse));
     let (mut fa, mut fc) = (
         PreparedFrame::for_config(&all),
         PreparedFrame::for_config(&coarse),
@@ -528,19 +537,19 @@ fn frames_without_normals_are_the_same_frames() {
         depth_scale: cam.depth_scale,
     };
     let mut configs = vec![
-        Config::new(c, Preset::Pc, Mode::L2),
-        Config::new(c, Preset::Phone, Mode::L2),
+        whole_config(c, Preset::Pc, Mode::L2),
+        whole_config(c, Preset::Phone, Mode::L2),
     ];
-    let mut contour_only = Config::new(c, Preset::Pc, Mode::L2);
+    let mut contour_only = whole_config(c, Preset::Pc, Mode::L2);
     contour_only.filter.normal_max_angle_deg = None;
     configs.push(contour_only);
     // Neither removal filter: the preparer without normals skips the pass.
-    let mut no_removal = Config::new(c, Preset::Pc, Mode::L2);
+    let mut no_removal = whole_config(c, Preset::Pc, Mode::L2);
     no_removal.filter.normal_max_angle_deg = None;
     no_removal.filter.contour_angle_deg = None;
     configs.push(no_removal);
     for (k, config) in configs.iter().enumerate() {
-        let (mut with, mut without) = (Preparer::new(config), Preparer::new(config));
+        let (mut with, mut without) = (Preparer::whole(config), Preparer::whole(config));
         without.set_normals(false);
         let (mut fw, mut fo) = (
             PreparedFrame::for_config(config),
