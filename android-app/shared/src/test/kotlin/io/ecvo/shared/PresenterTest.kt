@@ -92,4 +92,14 @@ class PresenterTest {
         p.onRecording(true)
         assertTrue(p.status.recording)
     }
+
+    @Test
+    fun theKeepScreenOnFlagChangesOnlyWhenTheStateDoes() {
+        val sw = ScreenOnSwitch()
+        // 20 polls a second: the window flag is touched at the first poll and at each change only.
+        val live = listOf(false, false, true, true, true, true, false, false, true)
+        val changes = live.map { sw.update(it) }
+        assertEquals(listOf(false, null, true, null, null, null, false, null, true), changes)
+        assertEquals(4, changes.count { it != null })
+    }
 }

@@ -72,7 +72,7 @@ class SessionTest {
         TrackingSession(fake).use { s ->
             s.startRecording(StreamRecorder(dir, cam))
             for (i in 1..6) s.push(i * 33_000_000L, depth, gray)
-            assertEquals(6, s.stopRecording()!!.framesWritten)
+            assertEquals(6, s.stopRecordingAndWait()!!.recorder.framesWritten)
         }
         assertEquals(6, StreamReader(DirectoryFiles(dir)).frames.size)
     }
@@ -308,5 +308,22 @@ class SessionTest {
         c.stopSource() // stopping the source finishes the recording
         assertFalse(c.presenter.status.recording)
         assertEquals(1, Recordings.list(dir.parentFile).first { it.dir == dir }.frames)
+    }
+
+    @Test
+    fun theOldTrackerIsClosedBeforeTheNewOneIsCreated() {
+        val made = ArrayList<FakeTracker>()
+        val openAtCreate = ArrayList<Int>()
+        val c = SessionController(
+            newTracker = { openAtCreate += made.count { !it.isClosed }; FakeTracker().also { made += it } },
+            nativeLibraryError = { null }, post = { it() }, nowNs = { 0L },
+        )
+        repeat(3) { assertTrue(c.start(FrameSource.REPLAY, config) { Source() }) }
+        assertEquals(listOf(0, 0, 0), openAtCreate)
+        assertEquals(listOf(true, true, false), made.map { it.isClosed })
+        // A start whose tracker fails leaves no session behind (Share has nothing of the previous one).
+        val failing = SessionController(newTracker = { throw IllegalArgumentException("bad config") }, nativeLibraryError = { null }, post = { it() })
+        assertFalse(failing.start(FrameSource.REPLAY, config) { Source() })
+        assertNull(failing.session)
     }
 }
