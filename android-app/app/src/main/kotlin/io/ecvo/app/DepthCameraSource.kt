@@ -2,7 +2,6 @@ package io.ecvo.app
 
 import android.annotation.SuppressLint
 import android.graphics.ImageFormat
-import android.hardware.camera2.CameraAccessException
 import android.hardware.camera2.CameraCaptureSession
 import android.hardware.camera2.CameraCharacteristics
 import android.hardware.camera2.CameraDevice
@@ -28,6 +27,8 @@ import io.ecvo.shared.IntensityRegistration
 import io.ecvo.shared.LiveCamera
 import io.ecvo.shared.LiveMode
 import io.ecvo.shared.LiveModeDecision
+import io.ecvo.shared.LiveCameras
+import io.ecvo.shared.LiveFallbackMemory
 import io.ecvo.shared.LiveModePolicy
 import io.ecvo.shared.Pairing
 import io.ecvo.shared.PosePolicy
@@ -38,6 +39,7 @@ import io.ecvo.shared.SourceHandle
 import io.ecvo.shared.StreamSize
 import io.ecvo.shared.StreamSizes
 import io.ecvo.shared.TimestampSource
+import io.ecvo.shared.TrackingResolution
 
 /**
  * Live frames from a Camera2 depth camera (`ImageFormat.DEPTH16`) with intensity from a
@@ -60,6 +62,8 @@ class DepthCameraSource(
     private val callbacks: SourceCallbacks,
     /** Called with each frame handed to the tracker (for the preview). */
     private val onTracked: (ShortArray, ByteArray) -> Unit = { _, _ -> },
+    /** Called (camera thread) with [Setup.pairKey] when the pair fell back to depth alone, to be remembered. */
+    private val onFellBack: (String) -> Unit = {},
 ) : SourceHandle {
     /** The cameras and sizes chosen by [find], and how a frame is made from them. */
     class Setup(
@@ -74,6 +78,10 @@ class DepthCameraSource(
         /** The depth camera's `SENSOR_ORIENTATION` (degrees) and whether it faces the back, for gravity. */
         val sensorOrientation: Int,
         val backFacing: Boolean,
+        /** Whether the depth camera's `SENSOR_INFO_TIMESTAMP_SOURCE` is REALTIME (one clock across camera instances). */
+        val depthRealtime: Boolean,
+        /** The depth + colour pair's [LiveFallbackMemory] key, or null without a colour camera. */
+        val pairKey: String?,
         /** Sentences for the user about fallbacks taken (no calibration, no lens pose, clocks). */
         val notes: List<String>,
     ) {
@@ -105,16 +113,24 @@ class DepthCameraSource(
     @Volatile var mode: LiveMode = setup.mode.mode
         private set
 
-    /** Opens the cameras (depth first) and starts streaming. Call with the CAMERA permission granted. */
+    /**
+     * Opens the cameras (depth first) and starts streaming; returns at once. Call with the
+     * CAMERA permission granted. The opens run on the camera thread, like every callback
+     * and failure path, so the maps of open cameras are touched by that thread alone.
+     */
     fun start(): DepthCameraSource {
         running = true
         depthReader.setOnImageAvailableListener({ r -> guarded("depth frame") { onDepth(r) } }, handler)
         colourReader?.setOnImageAvailableListener({ r -> guarded("colour frame") { onColour(r) } }, handler)
         callbacks.mode(mode)
         setup.mode.note?.let { callbacks.notice(it) }
-        open(setup.depthId, LiveCamera.DEPTH, depthReader)
-        val c = setup.colour
-        if (mode == LiveMode.DEPTH_AND_COLOUR && c != null && colourReader != null) open(c.id, LiveCamera.COLOUR, colourReader)
+        handler.post {
+            if (running) {
+                open(setup.depthId, LiveCamera.DEPTH, depthReader)
+                val c = setup.colour
+                if (mode == LiveMode.DEPTH_AND_COLOUR && c != null && colourReader != null) open(c.id, LiveCamera.COLOUR, colourReader)
+            }
+        }
         return this
     }
 
@@ -179,6 +195,7 @@ class DepthCameraSource(
         val colour = setup.colour
         if (mode == LiveMode.DEPTH_AND_COLOUR && colour != null) {
             if (watch.onDepth()) {
+                setup.pairKey?.let(onFellBack)
                 switchToDepthOnly("no colour frames arrived")
             } else {
                 if (!pairer.onDepth(ts, SystemClock.elapsedRealtimeNanos())) return
@@ -213,12 +230,14 @@ class DepthCameraSource(
         sessions.values.forEach { runCatching { it.close() } }
         sessions.clear()
         devices.values.toList().forEach { runCatching { it.close() } }
-        handler.postDelayed({ if (running) open(setup.depthId, LiveCamera.DEPTH, depthReader) }, REOPEN_DELAY_MS)
+        handler.postDelayed({ if (running) guarded("camera ${setup.depthId}: reopening") { open(setup.depthId, LiveCamera.DEPTH, depthReader) } }, REOPEN_DELAY_MS)
     }
 
     private fun onCameraFailed(id: String, camera: LiveCamera, failure: CameraFailure, message: String) {
         if (!running) return
-        when (LiveModePolicy.onFailure(mode, camera, failure)) {
+        val action = LiveModePolicy.onFailure(mode, camera, failure)
+        if (LiveModePolicy.remembers(mode, action)) setup.pairKey?.let(onFellBack)
+        when (action) {
             FailureAction.CONTINUE_DEPTH_ONLY -> switchToDepthOnly(message)
             FailureAction.RESTART_DEPTH_ONLY -> restartDepthOnly(message)
             FailureAction.FAIL -> callbacks.failed(message)
@@ -241,6 +260,8 @@ class DepthCameraSource(
                 override fun onOpened(device: CameraDevice) {
                     devices[id] = device
                     if (!running || (camera == LiveCamera.COLOUR && mode != LiveMode.DEPTH_AND_COLOUR)) { device.close(); return }
+                    // A new camera instance: its clock may restart lower (CameraTimeline).
+                    if (camera == LiveCamera.DEPTH) callbacks.cameraStarted(setup.depthRealtime)
                     guarded("camera $id") {
                         @Suppress("DEPRECATION")
                         device.createCaptureSession(listOf(reader.surface), object : CameraCaptureSession.StateCallback() {
@@ -259,7 +280,7 @@ class DepthCameraSource(
                             }
 
                             override fun onConfigureFailed(session: CameraCaptureSession) =
-                                onCameraFailed(id, camera, CameraFailure.OTHER, "camera $id: stream configuration failed")
+                                onCameraFailed(id, camera, CameraFailure.CONFIGURE_FAILED, "camera $id: stream configuration failed")
                         }, handler)
                     }
                 }
@@ -277,17 +298,20 @@ class DepthCameraSource(
 
                 override fun onError(device: CameraDevice, error: Int) {
                     device.close()
-                    val inUse = error == CameraDevice.StateCallback.ERROR_MAX_CAMERAS_IN_USE || error == CameraDevice.StateCallback.ERROR_CAMERA_IN_USE
+                    val failure = CameraFailure.fromErrorCode(error)
+                    val inUse = failure == CameraFailure.IN_USE || failure == CameraFailure.MAX_CAMERAS_IN_USE
                     onCameraFailed(
-                        id, camera, if (inUse) CameraFailure.IN_USE else CameraFailure.OTHER,
+                        id, camera, failure,
                         if (inUse) "camera $id is in use; this phone may not stream the depth and colour cameras at once" else "camera $id failed (error $error)",
                     )
                 }
             }, handler)
-        } catch (e: CameraAccessException) {
-            onCameraFailed(id, camera, CameraFailure.OTHER, "camera $id: ${e.message}")
         } catch (e: SecurityException) {
             callbacks.failed("camera $id: camera permission missing")
+        } catch (e: Exception) {
+            // CameraAccessException, IllegalArgumentException (an id gone), IllegalStateException:
+            // on the camera thread (open runs there only), never uncaught on it.
+            onCameraFailed(id, camera, CameraFailure.EXCEPTION, "camera $id: ${e.message ?: e.javaClass.simpleName}")
         }
     }
 
@@ -328,7 +352,12 @@ class DepthCameraSource(
          * Call at the start of a session, after the CAMERA permission was granted: without
          * it, Camera2 hides `LENS_INTRINSIC_CALIBRATION` and `LENS_POSE_*`.
          */
-        fun find(manager: CameraManager): Setup? {
+        fun find(
+            manager: CameraManager,
+            liveCameras: LiveCameras = LiveCameras.AUTO,
+            depthOnlyPairs: Set<String> = emptySet(),
+            resolution: TrackingResolution = TrackingResolution.AUTO,
+        ): Setup? {
             val ids = manager.cameraIdList
             for (depthId in ids) {
                 val dc = manager.getCameraCharacteristics(depthId)
@@ -351,14 +380,19 @@ class DepthCameraSource(
                 val depthCal = calibration(dc)
                 if (!depthCal.calibrated) notes += "The depth camera publishes no intrinsic calibration; its focal length is estimated from the lens and sensor size."
                 val depthCam = depthCal.sensorIntrinsics().forOutput(depthSize.width, depthSize.height)
-                val remap = DepthRemap.create(depthCam, depthSize.width, depthSize.height, depthCal.effectiveDistortion)
+                // The tracker's frame: the stream's size, or halved (TrackingResolution), undistorted if needed.
+                val frameSize = resolution.frameSize(depthSize)
+                val remap = DepthRemap.create(depthCam, frameSize.width, frameSize.height, depthCal.effectiveDistortion)
                 val colour = colourFor(manager, dc, colours, depthSize, remap, notes)
                 // Which cameras the phone guarantees to stream at once (API 30+); before, unknown.
                 val concurrent: List<Set<String>>? = if (Build.VERSION.SDK_INT >= 30) manager.concurrentCameraIds.map { it.toSet() } else null
+                val pairKey = colour?.let { LiveFallbackMemory.key(depthId, it.id) }
                 return Setup(
-                    depthId, depthSize, colour, remap, LiveModePolicy.start(depthId, colour?.id, concurrent),
+                    depthId, depthSize, colour, remap,
+                    LiveModePolicy.start(depthId, colour?.id, concurrent, liveCameras, pairKey != null && pairKey in depthOnlyPairs),
                     dc.get(CameraCharacteristics.SENSOR_ORIENTATION) ?: 0,
-                    facing != CameraMetadata.LENS_FACING_FRONT, notes,
+                    facing != CameraMetadata.LENS_FACING_FRONT,
+                    clock(dc) == TimestampSource.REALTIME, pairKey, notes,
                 )
             }
             return null
@@ -376,7 +410,7 @@ class DepthCameraSource(
             val cc = manager.getCameraCharacteristics(colourId)
             val yuv = cc.get(CameraCharacteristics.SCALER_STREAM_CONFIGURATION_MAP)?.getOutputSizes(ImageFormat.YUV_420_888)
                 ?.map { StreamSize(it.width, it.height) } ?: return null
-            val colourSize = StreamSizes.colour(yuv, depthSize, depthSize.width) ?: return null
+            val colourSize = StreamSizes.colour(yuv, depthSize, remap.camera.width) ?: return null
             val colourCam = calibration(cc).sensorIntrinsics().forOutput(colourSize.width, colourSize.height)
             val decision = PosePolicy.decide(
                 pose(dc), pose(cc), colourIsPrimary = colourId == primary,

@@ -107,6 +107,7 @@ class SessionController(
     private fun openSource(kind: FrameSource, open: (SourceCallbacks) -> SourceHandle): Boolean {
         val t = token.incrementAndGet()
         rate.clear()
+        paused = false
         presenter.onStarted(kind, nowNs())
         this.kind = kind
         return try {
@@ -171,6 +172,7 @@ class SessionController(
         val s = source
         source = null
         kind = FrameSource.NONE
+        paused = false
         if (s != null) {
             try {
                 s.stop()
@@ -180,6 +182,30 @@ class SessionController(
         }
         stopRecording()
         presenter.onStopped()
+    }
+
+    /** Whether the running source is paused ([pause]). */
+    var paused: Boolean = false
+        private set
+
+    /** Pauses the running source in place, if it can (a replay); true if it did. */
+    fun pause(): Boolean {
+        val s = source as? PausableSource ?: return false
+        if (paused) return true
+        s.pause()
+        paused = true
+        presenter.onPaused(true, nowNs())
+        return true
+    }
+
+    /** Resumes a [pause]d source; true if it did. */
+    fun resumePaused(): Boolean {
+        val s = source as? PausableSource ?: return false
+        if (!paused) return false
+        s.resume()
+        paused = false
+        presenter.onPaused(false, nowNs())
+        return true
     }
 
     /** Stops everything and releases the tracker. */

@@ -12,7 +12,7 @@ enum class StatusKind { IDLE, INITIALISING, TRACKING, LOST, ERROR }
 
 /** What the status area shows, as ready-to-display English text. */
 data class StatusText(
-    /** "Stopped", "Initialising", "Tracking", "Lost", "Error". */
+    /** "Stopped", "Paused", "Initialising", "Tracking", "Lost", "Error". */
     val state: String,
     val kind: StatusKind,
     /** "12.3 ms/frame" or "– ms/frame" before the first tracked frame. */
@@ -62,6 +62,7 @@ class TrackingPresenter(
     private var skippedTimestamps = 0L
     private var recordingDropped = 0L
     private var liveMode: LiveMode? = null
+    private var paused = false
     private val notices = LinkedHashSet<String>()
 
     /** The result of looking for a camera with DEPTH_OUTPUT. */
@@ -73,6 +74,7 @@ class TrackingPresenter(
     /** A source started at wall-clock [nowNs]; clears the previous run's error, notices and numbers. */
     fun onStarted(src: FrameSource, nowNs: Long) {
         source = src
+        paused = false
         error = null
         notices.clear()
         fps = 0.0
@@ -90,6 +92,14 @@ class TrackingPresenter(
     fun onStopped() {
         source = FrameSource.NONE
         stalled = false
+        paused = false
+    }
+
+    /** The source was paused or resumed at wall-clock [nowNs] (no stall is reported while paused). */
+    fun onPaused(on: Boolean, nowNs: Long) {
+        paused = on
+        stalled = false
+        lastPoseChangeWallNs = nowNs
     }
 
     /** Something failed (the message of an exception); shown until the next start. */
@@ -134,6 +144,7 @@ class TrackingPresenter(
             lastPoseNs = poseTimestampNs
             lastPoseChangeWallNs = nowNs
         }
+        if (paused) lastPoseChangeWallNs = nowNs
         stalled = source != FrameSource.NONE && nowNs - lastPoseChangeWallNs > stallAfterNs
     }
 
@@ -143,6 +154,7 @@ class TrackingPresenter(
             val (label, kind) = when {
                 error != null -> "Error" to StatusKind.ERROR
                 source == FrameSource.NONE -> "Stopped" to StatusKind.IDLE
+                paused -> "Paused" to StatusKind.IDLE
                 state == TrackingState.INITIALISING -> "Initialising" to StatusKind.INITIALISING
                 state == TrackingState.TRACKING -> "Tracking" to StatusKind.TRACKING
                 else -> "Lost" to StatusKind.LOST
