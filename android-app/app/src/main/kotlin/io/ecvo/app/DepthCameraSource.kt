@@ -51,8 +51,10 @@ import io.ecvo.shared.TrackingResolution
  * sizes and the intrinsics, lens distortion, the depth-to-colour pose,
  * pairing by clock, and the confidence policy. Frames reach [callbacks] on [handler]'s
  * thread at the depth stream's native size (a 240x180 ToF stream stays 240x180 with its
- * own intrinsics) as millimetres and 8-bit gray; every failure (including a throwing
- * Camera2 call) reaches `callbacks.failed`, never the thread's uncaught handler.
+ * own intrinsics), or halved ([TrackingResolution]), as millimetres and 8-bit gray;
+ * every failure (including a throwing Camera2 call) reaches the fallback policy or
+ * `callbacks.failed`, never the thread's uncaught handler. Camera opens, callbacks and
+ * closes all run on [handler]'s thread, which alone touches the maps of open cameras.
  */
 class DepthCameraSource(
     private val manager: CameraManager,
@@ -126,9 +128,11 @@ class DepthCameraSource(
         setup.mode.note?.let { callbacks.notice(it) }
         handler.post {
             if (running) {
-                open(setup.depthId, LiveCamera.DEPTH, depthReader)
-                val c = setup.colour
-                if (mode == LiveMode.DEPTH_AND_COLOUR && c != null && colourReader != null) open(c.id, LiveCamera.COLOUR, colourReader)
+                guarded("opening the cameras") {
+                    open(setup.depthId, LiveCamera.DEPTH, depthReader)
+                    val c = setup.colour
+                    if (mode == LiveMode.DEPTH_AND_COLOUR && c != null && colourReader != null) open(c.id, LiveCamera.COLOUR, colourReader)
+                }
             }
         }
         return this
@@ -285,19 +289,19 @@ class DepthCameraSource(
                     }
                 }
 
-                override fun onClosed(device: CameraDevice) {
+                override fun onClosed(device: CameraDevice) = guarded("camera $id: closing") {
                     if (devices[id] === device) devices.remove(id)
                     closeReadersIfIdle()
                 }
 
-                override fun onDisconnected(device: CameraDevice) {
-                    device.close()
+                override fun onDisconnected(device: CameraDevice) = guarded("camera $id: disconnected") {
+                    runCatching { device.close() }
                     // Ignored by the controller if this source was already replaced.
                     onCameraFailed(id, camera, CameraFailure.DISCONNECTED, "camera $id was disconnected")
                 }
 
-                override fun onError(device: CameraDevice, error: Int) {
-                    device.close()
+                override fun onError(device: CameraDevice, error: Int) = guarded("camera $id: error $error") {
+                    runCatching { device.close() }
                     val failure = CameraFailure.fromErrorCode(error)
                     val inUse = failure == CameraFailure.IN_USE || failure == CameraFailure.MAX_CAMERAS_IN_USE
                     onCameraFailed(

@@ -12,6 +12,8 @@ import android.os.Build
 import android.os.Bundle
 import android.os.Handler
 import android.os.Looper
+import android.net.Uri
+import android.provider.Settings
 import android.util.Log
 import android.view.View
 import android.view.WindowInsets
@@ -28,10 +30,12 @@ import io.ecvo.ReferenceFrame
 import io.ecvo.Tracker
 import io.ecvo.TrackerConfig
 import io.ecvo.shared.AppSettings
+import io.ecvo.shared.LiveCameras
+import io.ecvo.shared.ScreenOnSwitch
+import io.ecvo.shared.TrackingResolution
 import io.ecvo.shared.CameraIntrinsics
 import io.ecvo.shared.ConfidencePolicy
 import io.ecvo.shared.DirectoryFiles
-import io.ecvo.shared.ExportFiles
 import io.ecvo.shared.ExportPlan
 import io.ecvo.shared.ExportSelection
 import io.ecvo.shared.FrameSource
@@ -40,7 +44,6 @@ import io.ecvo.shared.ProjectionPlane
 import io.ecvo.shared.RecordingEntry
 import io.ecvo.shared.Recordings
 import io.ecvo.shared.SessionController
-import io.ecvo.shared.SessionExport
 import io.ecvo.shared.StatusKind
 import io.ecvo.shared.StreamFiles
 import io.ecvo.shared.StreamReader
@@ -65,8 +68,10 @@ class MainActivity : Activity() {
     private val pose = FloatArray(16)
     private var polls = 0L
     private var references: List<ReferenceFrame> = emptyList()
-    private var settings = AppSettings()
+    private val settings: AppSettings get() = SessionHolder.settings(this)
     private var hasDepthCamera = false
+    private val screenOn = ScreenOnSwitch()
+    private val exporter by lazy { Exporter(this) { msg -> controller.presenter.onNotice(msg); render() } }
 
     private lateinit var stateText: TextView
     private lateinit var numbersText: TextView
@@ -75,6 +80,7 @@ class MainActivity : Activity() {
     private lateinit var preview: ImageView
     private lateinit var liveButton: Button
     private lateinit var recordButton: ToggleButton
+    private lateinit var pauseButton: Button
 
     private val poll = object : Runnable {
         override fun run() {
@@ -114,15 +120,20 @@ class MainActivity : Activity() {
         preview = findViewById(R.id.preview)
         liveButton = findViewById(R.id.live)
         recordButton = findViewById(R.id.record)
-        settings = loadSettings()
+        pauseButton = findViewById(R.id.pause)
         SessionHolder.preview = settings.preview
 
         findViewById<Button>(R.id.replay_sample).setOnClickListener { startReplay(AssetStreamFiles(assets)) }
         findViewById<Button>(R.id.recordings).setOnClickListener { showRecordings() }
         liveButton.setOnClickListener { onLiveClicked() }
         findViewById<Button>(R.id.stop).setOnClickListener { SessionHolder.resumeLive = false; controller.stopSource(); render() }
+        pauseButton.setOnClickListener {
+            SessionHolder.resumeReplay = false
+            if (controller.paused) controller.resumePaused() else controller.pause()
+            render()
+        }
         findViewById<Button>(R.id.reset).setOnClickListener { SessionHolder.resumeLive = false; controller.reset(); trajectoryView.clear(); render() }
-        findViewById<Button>(R.id.export).setOnClickListener { export() }
+        findViewById<Button>(R.id.export).setOnClickListener { chooseExport() }
         findViewById<Button>(R.id.settings).setOnClickListener { showSettings() }
         recordButton.setOnClickListener { setRecording(recordButton.isChecked) }
         findViewById<RadioGroup>(R.id.plane).setOnCheckedChangeListener { _, id ->
@@ -149,9 +160,15 @@ class MainActivity : Activity() {
 
     override fun onResume() {
         super.onResume()
+        // Granted in the system settings while away: the "denied" message goes.
+        if (hasDepthCamera && hasCameraPermission()) controller.presenter.onCameraPermission(true)
         if (SessionHolder.resumeLive) {
             SessionHolder.resumeLive = false
             if (hasCameraPermission()) resumeLive()
+        }
+        if (SessionHolder.resumeReplay) {
+            SessionHolder.resumeReplay = false
+            controller.resumePaused()
         }
         ui.post(poll)
     }
@@ -163,6 +180,10 @@ class MainActivity : Activity() {
         if (!isChangingConfigurations && controller.running == FrameSource.LIVE) {
             SessionHolder.resumeLive = true
             controller.stopSource()
+        }
+        // A replay holds still while the app is away, and goes on on return (if the user had not paused it).
+        if (!isChangingConfigurations && controller.running == FrameSource.REPLAY && !controller.paused) {
+            SessionHolder.resumeReplay = controller.pause()
         }
         super.onPause()
     }
@@ -261,8 +282,27 @@ class MainActivity : Activity() {
         if (requestCode != REQUEST_CAMERA) return
         val granted = grantResults.isNotEmpty() && grantResults[0] == PackageManager.PERMISSION_GRANTED
         controller.presenter.onCameraPermission(granted)
-        if (granted) startLive()
+        if (granted) {
+            startLive()
+        } else if (grantResults.isNotEmpty() && !shouldShowRequestPermissionRationale(Manifest.permission.CAMERA)) {
+            // "Don't ask again" (or denied twice): only the app's settings can grant it now.
+            AlertDialog.Builder(this)
+                .setTitle(R.string.permission_settings_title)
+                .setMessage(R.string.permission_settings_message)
+                .setPositiveButton(R.string.permission_open_settings) { _, _ -> openAppSettings() }
+                .setNegativeButton(R.string.close, null)
+                .show()
+        }
         render()
+    }
+
+    private fun openAppSettings() {
+        try {
+            startActivity(Intent(Settings.ACTION_APPLICATION_DETAILS_SETTINGS, Uri.fromParts("package", packageName, null)))
+        } catch (e: ActivityNotFoundException) {
+            controller.presenter.onNotice("Open Settings → Apps → ecvo → Permissions to allow camera access.")
+            render()
+        }
     }
 
     /** The tracker's settings for frames of [camera] from a [kind] source. */
@@ -276,25 +316,43 @@ class MainActivity : Activity() {
         pointCloud = settings.pointCloud,
     )
 
-    /** Replays [files]; [recording] is the recordings folder it comes from (null: the bundled sample). */
+    /**
+     * Replays [files]; [recording] is the recordings folder it comes from (null: the
+     * bundled sample). The stream's lists are parsed on a worker thread (136 ms for a
+     * 10-minute list on a desktop JVM), then the replay starts on the UI thread.
+     */
     private fun startReplay(files: StreamFiles, recording: File? = null) {
-        val reader = try {
-            StreamReader(files)
-        } catch (e: Exception) {
-            controller.stopSource()
-            controller.presenter.onError("Cannot replay ${files.description}: ${e.message ?: e.javaClass.simpleName}")
-            render()
-            return
-        }
+        Thread(Runnable {
+            val reader = try {
+                StreamReader(files)
+            } catch (e: Exception) {
+                ui.post {
+                    controller.stopSource()
+                    controller.presenter.onError("Cannot replay ${files.description}: ${e.message ?: e.javaClass.simpleName}")
+                    render()
+                }
+                return@Runnable
+            }
+            ui.post { if (!isDestroyed) startReplay(reader, recording) }
+        }, "ecvo-replay-open").start()
+    }
+
+    private fun startReplay(reader: StreamReader, recording: File?) {
         SessionHolder.camera = null
         GravitySensor.clear(this) // no gravity in a recording: the first camera's x-z top view
         SessionHolder.resumeLive = false
+        SessionHolder.resumeReplay = false
         trajectoryView.clear()
         SessionHolder.previewSize = reader.camera.width to reader.camera.height
+        val s = settings
         val started = controller.start(FrameSource.REPLAY, trackerConfig(reader.camera, FrameSource.REPLAY)) { cb ->
-            ReplaySource(reader, cb) { d, g -> if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g) }.start()
+            ReplaySource(reader, cb, s.replaySpeed) { d, g -> if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g) }
+                .also { SessionHolder.replay = it }.start()
         }
-        if (started) SessionHolder.streams.onStarted(recording)
+        if (started) {
+            SessionHolder.streams.onStarted(recording)
+            SessionHolder.sessionPointCloud = s.pointCloud
+        }
         render()
     }
 
@@ -305,8 +363,9 @@ class MainActivity : Activity() {
 
     private fun startLive() {
         // Read now, with the permission granted: earlier, the calibration is hidden.
+        val s = settings
         val setup = try {
-            DepthCameraSource.find(cameraManager)
+            DepthCameraSource.find(cameraManager, s.liveCameras, s.depthOnlyPairs, s.trackingResolution)
         } catch (e: Exception) {
             controller.presenter.onError("Reading the depth camera failed: ${e.message ?: e.javaClass.simpleName}")
             render()
@@ -323,6 +382,7 @@ class MainActivity : Activity() {
         trajectoryView.clear()
         if (controller.start(FrameSource.LIVE, trackerConfig(setup.frame, FrameSource.LIVE)) { cb -> openCamera(setup, cb) }) {
             SessionHolder.streams.onStarted(null)
+            SessionHolder.sessionPointCloud = s.pointCloud
             setup.notes.forEach { controller.presenter.onNotice(it) }
         }
         render()
@@ -336,9 +396,14 @@ class MainActivity : Activity() {
 
     private fun openCamera(setup: DepthCameraSource.Setup, cb: io.ecvo.shared.SourceCallbacks): DepthCameraSource {
         SessionHolder.previewSize = setup.frame.width to setup.frame.height
-        val source = DepthCameraSource(cameraManager, setup, SessionHolder.frames, settings.confidence, cb) { d, g ->
-            if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g)
-        }
+        val app = applicationContext
+        val source = DepthCameraSource(
+            cameraManager, setup, SessionHolder.frames, settings.confidence, cb,
+            onTracked = { d, g -> if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g) },
+            // Remembered for this phone: the next Live starts with depth alone.
+            onFellBack = { key -> SessionHolder.rememberDepthOnly(app, key) },
+        )
+        SessionHolder.replay = null
         SessionHolder.camera = source
         return source.start()
     }
@@ -349,12 +414,15 @@ class MainActivity : Activity() {
             val dir = File(recordingsDir, name)
             if (controller.startRecording { cam -> StreamRecorder(dir, cam) }) SessionHolder.streams.onRecording(dir)
         } else {
-            val r = controller.stopRecording()
-            if (r != null) {
-                val dropped = controller.recordingDropped
-                val text = getString(R.string.recorded_to, r.framesWritten, r.dir.path) +
-                    (if (dropped > 0) getString(R.string.recorded_dropped, dropped) else "")
-                Toast.makeText(this, text, Toast.LENGTH_LONG).show()
+            // Returns at once; the queue drains on the recorder's thread, then the toast.
+            val app = applicationContext
+            if (controller.stopRecording { r ->
+                    val text = app.getString(R.string.recorded_to, r.recorder.framesWritten, r.recorder.dir.path) +
+                        (if (r.dropped > 0) app.getString(R.string.recorded_dropped, r.dropped) else "")
+                    Toast.makeText(app, text, Toast.LENGTH_LONG).show()
+                }
+            ) {
+                Toast.makeText(this, R.string.recording_finishing, Toast.LENGTH_SHORT).show()
             }
         }
         render()
@@ -388,13 +456,18 @@ class MainActivity : Activity() {
 
     /** Replay, export or delete one recording. */
     private fun showRecordingActions(r: RecordingEntry) {
-        val actions = arrayOf<CharSequence>(getString(R.string.recording_replay), getString(R.string.recording_export), getString(R.string.recording_delete))
+        val actions = arrayOf<CharSequence>(
+            getString(R.string.recording_replay), getString(R.string.recording_export), getString(R.string.export_downloads), getString(R.string.recording_delete),
+        )
         keep("recording:" + r.name, AlertDialog.Builder(this)
             .setTitle(r.name)
             .setItems(actions) { _, which ->
                 when (which) {
                     0 -> startReplay(DirectoryFiles(r.dir), r.dir)
-                    1 -> export(ExportSelection.forRecording(r.dir, controller.session != null, SessionHolder.streams.stream), r.name)
+                    1, 2 -> exportPlan(
+                        ExportSelection.forRecording(r.dir, controller.session != null, SessionHolder.streams.stream), r.name,
+                        if (which == 1) Exporter.Target.SHARE else Exporter.Target.DOWNLOADS,
+                    )
                     else -> confirmDelete(r)
                 }
             }
@@ -422,66 +495,26 @@ class MainActivity : Activity() {
             .show())
     }
 
-    /** The Share button: the session with the stream it replays or recorded. */
-    private fun export() {
+    /** The Share button: the session with the stream it replays or recorded, shared or saved to Downloads. */
+    private fun chooseExport() {
         val plan = ExportSelection.forSession(controller.session != null, SessionHolder.streams.stream)
         if (plan == null) {
             Toast.makeText(this, R.string.nothing_to_export, Toast.LENGTH_LONG).show()
             return
         }
-        export(plan, null)
-    }
-
-    /** Writes [plan] into a new zip on a worker thread (never deleting an earlier one), then shares it. */
-    private fun export(plan: ExportPlan, recordingName: String?) {
-        Toast.makeText(this, R.string.exporting, Toast.LENGTH_SHORT).show()
-        val stamp = SimpleDateFormat("yyyyMMdd-HHmmss", Locale.ROOT).format(Date())
-        val base = if (recordingName != null) "ecvo-recording-$recordingName" else "ecvo-$stamp"
-        val exports = ExportProvider.exportsDir(cacheDir)
-        val session = if (plan.withSession) controller.session else null
-        val withCloud = settings.pointCloud
-        Thread(Runnable {
-            try {
-                val zip = ExportFiles.pack(plan, exports, base) { dir ->
-                    val t = session?.tracker
-                    if (t != null) {
-                        // The tracker keeps the latest Tracker.TRAJECTORY_WINDOW poses: export those.
-                        val poses = t.trajectorySince(t.stats().trajectoryStart.toInt())
-                        SessionExport.write(dir, poses, t.references(), if (withCloud) t.pointCloud(MAX_EXPORT_POINTS) else null)
-                    }
-                }
-                ui.post { share(zip) }
-            } catch (e: Exception) {
-                ui.post { controller.presenter.onNotice("Export failed: ${e.message ?: e.javaClass.simpleName}"); render() }
+        AlertDialog.Builder(this)
+            .setItems(arrayOf<CharSequence>(getString(R.string.export_share), getString(R.string.export_downloads))) { _, which ->
+                exportPlan(plan, null, if (which == 0) Exporter.Target.SHARE else Exporter.Target.DOWNLOADS)
             }
-        }, "ecvo-export").start()
+            .setNegativeButton(R.string.close, null)
+            .show()
     }
 
-    private fun share(zip: File) {
-        val send = Intent(Intent.ACTION_SEND)
-            .setType("application/zip")
-            .putExtra(Intent.EXTRA_STREAM, ExportProvider.uriFor(zip))
-            .addFlags(Intent.FLAG_GRANT_READ_URI_PERMISSION)
-        try {
-            startActivity(Intent.createChooser(send, getString(R.string.share_title)))
-        } catch (e: ActivityNotFoundException) {
-            controller.presenter.onNotice("No app can receive the export; it is at ${zip.path}")
-            render()
-        }
+    private fun exportPlan(plan: ExportPlan, recordingName: String?, target: Exporter.Target) {
+        exporter.export(plan, recordingName, if (plan.withSession) controller.session else null, SessionHolder.sessionPointCloud, target)
     }
 
-    private fun loadSettings(): AppSettings {
-        val prefs = getSharedPreferences(PREFS, MODE_PRIVATE)
-        return AppSettings.fromMap(prefs.all.mapValues { it.value?.toString() })
-    }
-
-    private fun saveSettings(s: AppSettings) {
-        settings = s
-        SessionHolder.preview = s.preview
-        val e = getSharedPreferences(PREFS, MODE_PRIVATE).edit()
-        for ((k, v) in s.toMap()) e.putString(k, v)
-        e.apply()
-    }
+    private fun saveSettings(s: AppSettings) = SessionHolder.saveSettings(this, s)
 
     /** One row per setting; tapping a row moves it to its next value. */
     private fun showSettings() {
@@ -492,6 +525,10 @@ class MainActivity : Activity() {
             "${getString(R.string.settings_confidence)}: ${s.confidence.label}",
             "${getString(R.string.settings_preview)}: ${s.preview.name.lowercase()}",
             "${getString(R.string.settings_cloud)}: ${if (s.pointCloud) "on" else "off"}",
+            "${getString(R.string.settings_live_cameras)}: ${s.liveCameras.label}" +
+                if (s.depthOnlyPairs.isNotEmpty() && s.liveCameras == LiveCameras.AUTO) " (depth only remembered for ${s.depthOnlyPairs.joinToString()})" else "",
+            "${getString(R.string.settings_resolution)}: ${s.trackingResolution.label}",
+            "${getString(R.string.settings_speed)}: ${s.replaySpeed}x",
         )
         keep("settings", AlertDialog.Builder(this)
             .setTitle(R.string.settings)
@@ -502,10 +539,14 @@ class MainActivity : Activity() {
                         1 -> s.copy(mode = next(s.mode, io.ecvo.Mode.entries))
                         2 -> s.copy(confidence = next(s.confidence, ConfidencePolicy.entries))
                         3 -> s.copy(preview = next(s.preview, PreviewKind.entries))
-                        else -> s.copy(pointCloud = !s.pointCloud)
+                        4 -> s.copy(pointCloud = !s.pointCloud)
+                        5 -> s.withLiveCameras(next(s.liveCameras, LiveCameras.entries))
+                        6 -> s.copy(trackingResolution = next(s.trackingResolution, TrackingResolution.entries))
+                        else -> s.copy(replaySpeed = next(s.replaySpeed, AppSettings.REPLAY_SPEEDS))
                     },
                 )
-                if (which != 3) Toast.makeText(this, R.string.settings_applies, Toast.LENGTH_SHORT).show()
+                if (which == 7) SessionHolder.replay?.setSpeed(settings.replaySpeed)
+                if (which != 3 && which != 7) Toast.makeText(this, R.string.settings_applies, Toast.LENGTH_SHORT).show()
                 showSettings()
             }
             .setNegativeButton(R.string.close, null)
@@ -555,11 +596,13 @@ class MainActivity : Activity() {
         messageText.visibility = if (st.message == null) View.GONE else View.VISIBLE
         liveButton.isEnabled = hasDepthCamera
         if (recordButton.isChecked != st.recording) recordButton.isChecked = st.recording
-        // Keep the screen on during a hands-off live session only.
-        if (controller.running == FrameSource.LIVE) {
-            window.addFlags(WindowManager.LayoutParams.FLAG_KEEP_SCREEN_ON)
-        } else {
-            window.clearFlags(WindowManager.LayoutParams.FLAG_KEEP_SCREEN_ON)
+        pauseButton.isEnabled = controller.running == FrameSource.REPLAY
+        pauseButton.setText(if (controller.paused) R.string.resume else R.string.pause)
+        // Keep the screen on during a hands-off live session only; the window is touched on changes only.
+        when (screenOn.update(controller.running == FrameSource.LIVE)) {
+            true -> window.addFlags(WindowManager.LayoutParams.FLAG_KEEP_SCREEN_ON)
+            false -> window.clearFlags(WindowManager.LayoutParams.FLAG_KEEP_SCREEN_ON)
+            null -> Unit
         }
     }
 
@@ -569,8 +612,6 @@ class MainActivity : Activity() {
         private const val REFERENCES_EVERY = 10L
         private const val PREVIEW_EVERY = 4L
         private const val REQUEST_CAMERA = 1
-        private const val PREFS = "ecvo-settings"
         private const val STATE_DIALOG = "dialog"
-        private const val MAX_EXPORT_POINTS = 500_000
     }
 }

@@ -25,6 +25,8 @@ data class AppSettings(
     val depthOnlyPairs: Set<String> = emptySet(),
     /** The depth stream's size for the tracker: native, halved, or halved above QVGA. */
     val trackingResolution: TrackingResolution = TrackingResolution.AUTO,
+    /** Replay speed, one of [REPLAY_SPEEDS] (1 = as recorded). */
+    val replaySpeed: Double = 1.0,
 ) {
     /** These settings with the user's choice of live cameras; choosing auto forgets the remembered fallbacks (it tries again). */
     fun withLiveCameras(c: LiveCameras): AppSettings = copy(liveCameras = c, depthOnlyPairs = if (c == LiveCameras.AUTO) emptySet() else depthOnlyPairs)
@@ -37,7 +39,7 @@ data class AppSettings(
         KEY_PRESET to preset.name, KEY_MODE to mode.name, KEY_CONFIDENCE to confidence.label,
         KEY_PREVIEW to preview.name, KEY_CLOUD to pointCloud.toString(),
         KEY_LIVE_CAMERAS to liveCameras.name, KEY_DEPTH_ONLY_PAIRS to LiveFallbackMemory.encode(depthOnlyPairs),
-        KEY_RESOLUTION to trackingResolution.name,
+        KEY_RESOLUTION to trackingResolution.name, KEY_REPLAY_SPEED to replaySpeed.toString(),
     )
 
     companion object {
@@ -49,6 +51,10 @@ data class AppSettings(
         const val KEY_LIVE_CAMERAS = "live_cameras"
         const val KEY_DEPTH_ONLY_PAIRS = "depth_only_pairs"
         const val KEY_RESOLUTION = "tracking_resolution"
+        const val KEY_REPLAY_SPEED = "replay_speed"
+
+        /** The replay speeds offered. */
+        val REPLAY_SPEEDS: List<Double> = listOf(0.5, 1.0, 2.0, 4.0)
 
         /** Reads stored pairs; a missing or unknown value falls back to the default, never throws. */
         fun fromMap(m: Map<String, String?>): AppSettings {
@@ -62,6 +68,7 @@ data class AppSettings(
                 liveCameras = LiveCameras.entries.firstOrNull { it.name == m[KEY_LIVE_CAMERAS] } ?: d.liveCameras,
                 depthOnlyPairs = LiveFallbackMemory.decode(m[KEY_DEPTH_ONLY_PAIRS]),
                 trackingResolution = TrackingResolution.entries.firstOrNull { it.name == m[KEY_RESOLUTION] } ?: d.trackingResolution,
+                replaySpeed = m[KEY_REPLAY_SPEED]?.toDoubleOrNull()?.takeIf { it in REPLAY_SPEEDS } ?: d.replaySpeed,
             )
         }
     }

@@ -242,6 +242,8 @@ class SessionController(
         } catch (e: IllegalStateException) {
             Tracker.NO_POSE // closed between the check and the calls
         } catch (e: RuntimeException) {
+            // The screen says "Error": the source stops too, rather than feed a tracker that fails.
+            stopSource()
             presenter.onError(describe("Reading the tracker failed", e))
             Tracker.NO_POSE
         }
