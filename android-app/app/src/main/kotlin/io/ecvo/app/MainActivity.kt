@@ -28,13 +28,9 @@ import android.window.OnBackInvokedCallback
 import android.window.OnBackInvokedDispatcher
 import io.ecvo.ReferenceFrame
 import io.ecvo.Tracker
-import io.ecvo.TrackerConfig
 import io.ecvo.shared.AppSettings
-import io.ecvo.shared.LiveCameras
 import io.ecvo.shared.ScreenOnSwitch
-import io.ecvo.shared.TrackingResolution
-import io.ecvo.shared.CameraIntrinsics
-import io.ecvo.shared.ConfidencePolicy
+import io.ecvo.shared.SettingsMenu
 import io.ecvo.shared.DirectoryFiles
 import io.ecvo.shared.ExportPlan
 import io.ecvo.shared.ExportSelection
@@ -305,17 +301,6 @@ class MainActivity : Activity() {
         }
     }
 
-    /** The tracker's settings for frames of [camera] from a [kind] source. */
-    private fun trackerConfig(camera: CameraIntrinsics, kind: FrameSource) = TrackerConfig(
-        width = camera.width, height = camera.height,
-        fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy,
-        depthFormat = if (camera.depthScale == 1000.0) io.ecvo.DepthFormat.MILLIMETRES else io.ecvo.DepthFormat.CUSTOM_SCALE,
-        depthScale = camera.depthScale,
-        preset = settings.preset, mode = settings.mode,
-        admission = SessionController.admissionFor(kind),
-        pointCloud = settings.pointCloud,
-    )
-
     /**
      * Replays [files]; [recording] is the recordings folder it comes from (null: the
      * bundled sample). The stream's lists are parsed on a worker thread (136 ms for a
@@ -345,7 +330,7 @@ class MainActivity : Activity() {
         trajectoryView.clear()
         SessionHolder.previewSize = reader.camera.width to reader.camera.height
         val s = settings
-        val started = controller.start(FrameSource.REPLAY, trackerConfig(reader.camera, FrameSource.REPLAY)) { cb ->
+        val started = controller.start(FrameSource.REPLAY, s.trackerConfig(reader.camera, FrameSource.REPLAY)) { cb ->
             ReplaySource(reader, cb, s.replaySpeed) { d, g -> if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g) }
                 .also { SessionHolder.replay = it }.start()
         }
@@ -380,7 +365,7 @@ class MainActivity : Activity() {
         liveSetup = setup
         GravitySensor.measure(this, setup.sensorOrientation, setup.backFacing)
         trajectoryView.clear()
-        if (controller.start(FrameSource.LIVE, trackerConfig(setup.frame, FrameSource.LIVE)) { cb -> openCamera(setup, cb) }) {
+        if (controller.start(FrameSource.LIVE, s.trackerConfig(setup.frame, FrameSource.LIVE)) { cb -> openCamera(setup, cb) }) {
             SessionHolder.streams.onStarted(null)
             SessionHolder.sessionPointCloud = s.pointCloud
             setup.notes.forEach { controller.presenter.onNotice(it) }
@@ -519,41 +504,31 @@ class MainActivity : Activity() {
     /** One row per setting; tapping a row moves it to its next value. */
     private fun showSettings() {
         val s = settings
-        val rows = arrayOf<CharSequence>(
-            "${getString(R.string.settings_preset)}: ${s.preset}",
-            "${getString(R.string.settings_mode)}: ${s.mode}",
-            "${getString(R.string.settings_confidence)}: ${s.confidence.label}",
-            "${getString(R.string.settings_preview)}: ${s.preview.name.lowercase()}",
-            "${getString(R.string.settings_cloud)}: ${if (s.pointCloud) "on" else "off"}",
-            "${getString(R.string.settings_live_cameras)}: ${s.liveCameras.label}" +
-                if (s.depthOnlyPairs.isNotEmpty() && s.liveCameras == LiveCameras.AUTO) " (depth only remembered for ${s.depthOnlyPairs.joinToString()})" else "",
-            "${getString(R.string.settings_resolution)}: ${s.trackingResolution.label}",
-            "${getString(R.string.settings_speed)}: ${s.replaySpeed}x",
-        )
+        val rows = SettingsMenu.Row.entries
+        val labels = rows.map { "${getString(settingTitle(it))}: ${SettingsMenu.value(s, it)}" }.toTypedArray<CharSequence>()
         keep("settings", AlertDialog.Builder(this)
             .setTitle(R.string.settings)
-            .setItems(rows) { _, which ->
-                saveSettings(
-                    when (which) {
-                        0 -> s.copy(preset = next(s.preset, io.ecvo.Preset.entries))
-                        1 -> s.copy(mode = next(s.mode, io.ecvo.Mode.entries))
-                        2 -> s.copy(confidence = next(s.confidence, ConfidencePolicy.entries))
-                        3 -> s.copy(preview = next(s.preview, PreviewKind.entries))
-                        4 -> s.copy(pointCloud = !s.pointCloud)
-                        5 -> s.withLiveCameras(next(s.liveCameras, LiveCameras.entries))
-                        6 -> s.copy(trackingResolution = next(s.trackingResolution, TrackingResolution.entries))
-                        else -> s.copy(replaySpeed = next(s.replaySpeed, AppSettings.REPLAY_SPEEDS))
-                    },
-                )
-                if (which == 7) SessionHolder.replay?.setSpeed(settings.replaySpeed)
-                if (which != 3 && which != 7) Toast.makeText(this, R.string.settings_applies, Toast.LENGTH_SHORT).show()
+            .setItems(labels) { _, which ->
+                val row = rows[which]
+                saveSettings(SettingsMenu.step(s, row))
+                if (row == SettingsMenu.Row.REPLAY_SPEED) SessionHolder.replay?.setSpeed(settings.replaySpeed)
+                if (!row.appliesAtOnce) Toast.makeText(this, R.string.settings_applies, Toast.LENGTH_SHORT).show()
                 showSettings()
             }
             .setNegativeButton(R.string.close, null)
             .show())
     }
 
-    private fun <T> next(v: T, all: List<T>): T = all[(all.indexOf(v) + 1) % all.size]
+    private fun settingTitle(row: SettingsMenu.Row): Int = when (row) {
+        SettingsMenu.Row.PRESET -> R.string.settings_preset
+        SettingsMenu.Row.MODE -> R.string.settings_mode
+        SettingsMenu.Row.CONFIDENCE -> R.string.settings_confidence
+        SettingsMenu.Row.PREVIEW -> R.string.settings_preview
+        SettingsMenu.Row.POINT_CLOUD -> R.string.settings_cloud
+        SettingsMenu.Row.LIVE_CAMERAS -> R.string.settings_live_cameras
+        SettingsMenu.Row.RESOLUTION -> R.string.settings_resolution
+        SettingsMenu.Row.REPLAY_SPEED -> R.string.settings_speed
+    }
 
     /** Polls the session and redraws. */
     private fun refresh() {

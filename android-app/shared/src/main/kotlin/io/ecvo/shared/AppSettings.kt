@@ -1,7 +1,9 @@
 package io.ecvo.shared
 
+import io.ecvo.DepthFormat
 import io.ecvo.Mode
 import io.ecvo.Preset
+import io.ecvo.TrackerConfig
 
 /** What the user can preview beside the trajectory. */
 enum class PreviewKind { NONE, DEPTH, INTENSITY }
@@ -30,6 +32,17 @@ data class AppSettings(
 ) {
     /** These settings with the user's choice of live cameras; choosing auto forgets the remembered fallbacks (it tries again). */
     fun withLiveCameras(c: LiveCameras): AppSettings = copy(liveCameras = c, depthOnlyPairs = if (c == LiveCameras.AUTO) emptySet() else depthOnlyPairs)
+
+    /** The tracker's configuration for frames of [camera] from a [kind] source, with these settings. */
+    fun trackerConfig(camera: CameraIntrinsics, kind: FrameSource): TrackerConfig = TrackerConfig(
+        width = camera.width, height = camera.height,
+        fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy,
+        depthFormat = if (camera.depthScale == 1000.0) DepthFormat.MILLIMETRES else DepthFormat.CUSTOM_SCALE,
+        depthScale = camera.depthScale,
+        preset = preset, mode = mode,
+        admission = SessionController.admissionFor(kind),
+        pointCloud = pointCloud,
+    )
 
     /** These settings remembering that the pair [key] fell back to depth alone. */
     fun rememberDepthOnly(key: String): AppSettings = copy(depthOnlyPairs = depthOnlyPairs + key)
