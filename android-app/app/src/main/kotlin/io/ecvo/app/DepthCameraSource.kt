@@ -107,6 +107,8 @@ class DepthCameraSource(
     private val frameDepth = ShortArray(setup.frame.pixels)
     /** The intensity of a depth-only frame: all zero, which the engine tracks on depth alone. */
     private val noIntensity = ByteArray(setup.frame.pixels)
+    /** The registered intensity, reused frame after frame (the tracker, recorder and preview copy it). */
+    private val registered = ByteArray(setup.frame.pixels)
     private val y = ByteArray(setup.colour?.let { it.size.width * it.size.height } ?: 0)
     private var confidenceNoted = false
     private var colourFrames = 0
@@ -204,7 +206,7 @@ class DepthCameraSource(
             } else {
                 if (!pairer.onDepth(ts, SystemClock.elapsedRealtimeNanos())) return
                 setup.remap.apply(rawDepth, frameDepth)
-                val gray = colour.registration.register(frameDepth, GrayPlane(y, colour.size.width, colour.size.height))
+                val gray = colour.registration.register(frameDepth, GrayPlane(y, colour.size.width, colour.size.height), registered)
                 onTracked(frameDepth, gray)
                 callbacks.frame(ts, frameDepth, gray)
                 return
@@ -363,7 +365,9 @@ class DepthCameraSource(
             resolution: TrackingResolution = TrackingResolution.AUTO,
         ): Setup? {
             val ids = manager.cameraIdList
-            for (depthId in ids) {
+            // A back-facing depth camera first (the usual world-facing ToF), then the others.
+            val ordered = ids.sortedBy { id -> if (manager.getCameraCharacteristics(id).get(CameraCharacteristics.LENS_FACING) == CameraMetadata.LENS_FACING_BACK) 0 else 1 }
+            for (depthId in ordered) {
                 val dc = manager.getCameraCharacteristics(depthId)
                 val caps = dc.get(CameraCharacteristics.REQUEST_AVAILABLE_CAPABILITIES) ?: continue
                 if (CameraMetadata.REQUEST_AVAILABLE_CAPABILITIES_DEPTH_OUTPUT !in caps) continue
@@ -402,15 +406,16 @@ class DepthCameraSource(
             return null
         }
 
-        /** The first colour camera of [colours] with a YUV stream, with its registration to the depth frame; null if none. */
+        /** The primary (largest-sensor) colour camera of [colours], with its registration to the depth frame; null if none or it has no YUV stream. */
         private fun colourFor(
             manager: CameraManager, dc: CameraCharacteristics, colours: List<String>, depthSize: StreamSize, remap: DepthRemap, notes: MutableList<String>,
         ): Colour? {
-            val colourId = colours.firstOrNull() ?: return null
-            // The largest sensor is the "primary" one.
+            if (colours.isEmpty()) return null
+            // The largest sensor is the "primary" one; it is the one used (not merely the first listed).
             val primary = colours.maxBy { id ->
                 manager.getCameraCharacteristics(id).get(CameraCharacteristics.SENSOR_INFO_ACTIVE_ARRAY_SIZE)?.let { it.width().toLong() * it.height() } ?: 0L
             }
+            val colourId = primary
             val cc = manager.getCameraCharacteristics(colourId)
             val yuv = cc.get(CameraCharacteristics.SCALER_STREAM_CONFIGURATION_MAP)?.getOutputSizes(ImageFormat.YUV_420_888)
                 ?.map { StreamSize(it.width, it.height) } ?: return null

@@ -67,6 +67,7 @@ class MainActivity : Activity() {
     private val settings: AppSettings get() = SessionHolder.settings(this)
     private var hasDepthCamera = false
     private val screenOn = ScreenOnSwitch()
+    private var previewBitmap: Bitmap? = null
     private val exporter by lazy { Exporter(this) { msg -> controller.presenter.onNotice(msg); render() } }
 
     private lateinit var stateText: TextView
@@ -334,10 +335,9 @@ class MainActivity : Activity() {
             ReplaySource(reader, cb, s.replaySpeed) { d, g -> if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g) }
                 .also { SessionHolder.replay = it }.start()
         }
-        if (started) {
-            SessionHolder.streams.onStarted(recording)
-            SessionHolder.sessionPointCloud = s.pointCloud
-        }
+        // Set whether or not the start succeeded: a failed start must not export the previous session's stream.
+        SessionHolder.streams.onStarted(if (started) recording else null)
+        SessionHolder.sessionPointCloud = s.pointCloud
         render()
     }
 
@@ -365,9 +365,11 @@ class MainActivity : Activity() {
         liveSetup = setup
         GravitySensor.measure(this, setup.sensorOrientation, setup.backFacing)
         trajectoryView.clear()
-        if (controller.start(FrameSource.LIVE, s.trackerConfig(setup.frame, FrameSource.LIVE)) { cb -> openCamera(setup, cb) }) {
-            SessionHolder.streams.onStarted(null)
-            SessionHolder.sessionPointCloud = s.pointCloud
+        SessionHolder.gravityPending = true
+        val started = controller.start(FrameSource.LIVE, s.trackerConfig(setup.frame, FrameSource.LIVE)) { cb -> openCamera(setup, cb) }
+        SessionHolder.streams.onStarted(null) // also after a failed start: no earlier session's stream
+        SessionHolder.sessionPointCloud = s.pointCloud
+        if (started) {
             setup.notes.forEach { controller.presenter.onNotice(it) }
         }
         render()
@@ -384,7 +386,14 @@ class MainActivity : Activity() {
         val app = applicationContext
         val source = DepthCameraSource(
             cameraManager, setup, SessionHolder.frames, settings.confidence, cb,
-            onTracked = { d, g -> if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g) },
+            onTracked = { d, g ->
+                // The tracker's world is the first tracked frame's camera: gravity is taken then.
+                if (SessionHolder.gravityPending) {
+                    SessionHolder.gravityPending = false
+                    ui.post { GravitySensor.freeze() }
+                }
+                if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g)
+            },
             // Remembered for this phone: the next Live starts with depth alone.
             onFellBack = { key -> SessionHolder.rememberDepthOnly(app, key) },
         )
@@ -552,7 +561,15 @@ class MainActivity : Activity() {
         val (w, h) = SessionHolder.previewSize ?: return
         val px = SessionHolder.latest.takePreview(kind) ?: return
         if (px.size != w * h) return
-        preview.setImageBitmap(Bitmap.createBitmap(px, w, h, Bitmap.Config.ARGB_8888))
+        // One bitmap per size, refilled: not a new one every 200 ms.
+        val b = previewBitmap?.takeIf { it.width == w && it.height == h }
+        if (b != null) {
+            b.setPixels(px, 0, w, 0, 0, w, h)
+            preview.invalidate()
+        } else {
+            previewBitmap = Bitmap.createBitmap(px, w, h, Bitmap.Config.ARGB_8888).copy(Bitmap.Config.ARGB_8888, true)
+            preview.setImageBitmap(previewBitmap)
+        }
     }
 
     private fun render() {

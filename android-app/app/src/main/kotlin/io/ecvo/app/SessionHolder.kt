@@ -58,6 +58,9 @@ object SessionHolder {
     /** Width and height of the frames the preview shows. */
     @Volatile var previewSize: Pair<Int, Int>? = null
 
+    /** Whether the live session still waits for its first tracked frame to take gravity (GravitySensor.freeze). */
+    @Volatile var gravityPending = false
+
     /** Whether the current session builds a point cloud (the setting at its start, not at export). */
     @Volatile var sessionPointCloud = false
 
