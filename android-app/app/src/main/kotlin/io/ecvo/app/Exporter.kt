@@ -11,6 +11,7 @@ import android.widget.Toast
 import io.ecvo.shared.ExportFiles
 import io.ecvo.shared.ExportPlan
 import io.ecvo.shared.SessionExport
+import io.ecvo.shared.StreamMetadata
 import io.ecvo.shared.TrackingSession
 import java.io.File
 import java.io.FileOutputStream
@@ -38,9 +39,10 @@ class Exporter(
     /**
      * Writes [plan] on a worker thread, then shares it or says where it was saved;
      * [session] is the session whose results it holds (when the plan asks for them),
-     * [pointCloud] whether that session built a cloud.
+     * [pointCloud] whether that session built a cloud, [metadata] what goes beside them
+     * as `metadata.json`.
      */
-    fun export(plan: ExportPlan, recordingName: String?, session: TrackingSession?, pointCloud: Boolean, target: Target) {
+    fun export(plan: ExportPlan, recordingName: String?, session: TrackingSession?, pointCloud: Boolean, metadata: StreamMetadata, target: Target) {
         Toast.makeText(activity, R.string.exporting, Toast.LENGTH_SHORT).show()
         val stamp = SimpleDateFormat("yyyyMMdd-HHmmss", Locale.ROOT).format(Date())
         val base = if (recordingName != null) "ecvo-recording-$recordingName" else "ecvo-$stamp"
@@ -53,6 +55,7 @@ class Exporter(
                 // The tracker keeps the latest Tracker.TRAJECTORY_WINDOW poses: export those.
                 val poses = t.trajectorySince(t.stats().trajectoryStart.toInt())
                 SessionExport.write(dir, poses, t.references(), if (pointCloud) t.pointCloud(MAX_EXPORT_POINTS) else null)
+                metadata.write(dir) // device, versions, settings, intrinsics, gravity
             }
             Unit
         }

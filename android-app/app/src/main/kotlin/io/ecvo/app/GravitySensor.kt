@@ -15,7 +15,8 @@ import io.ecvo.shared.GravityAlignment
  * averages them (or the next ones, if none came yet), turns the result into the depth
  * camera's frame with its `SENSOR_ORIENTATION`, and removes the listener. [up] stays null
  * for a replay (no gravity was recorded) or a phone without either sensor: the top view
- * is then the first camera's x-z plane. UI thread only.
+ * is then the first camera's x-z plane, unless the recording stored gravity ([use]).
+ * UI thread only.
  */
 object GravitySensor {
     /** World up in the tracker's world (the first camera's frame), or null. */
@@ -28,6 +29,12 @@ object GravitySensor {
     fun clear(context: Context) {
         stop(context)
         up = null
+    }
+
+    /** Uses [recorded] (a replayed recording's `gravity_up`) as the direction, with no measurement. */
+    fun use(context: Context, recorded: DoubleArray) {
+        stop(context)
+        up = recorded.copyOf()
     }
 
     /** Starts listening for a session whose depth camera has [orientationDeg] and faces the back or not. */

@@ -29,6 +29,7 @@ import android.window.OnBackInvokedDispatcher
 import io.ecvo.ReferenceFrame
 import io.ecvo.Tracker
 import io.ecvo.shared.AppSettings
+import io.ecvo.shared.CameraIntrinsics
 import io.ecvo.shared.ScreenOnSwitch
 import io.ecvo.shared.SettingsMenu
 import io.ecvo.shared.DirectoryFiles
@@ -42,6 +43,7 @@ import io.ecvo.shared.Recordings
 import io.ecvo.shared.SessionController
 import io.ecvo.shared.StatusKind
 import io.ecvo.shared.StreamFiles
+import io.ecvo.shared.StreamMetadata
 import io.ecvo.shared.StreamReader
 import io.ecvo.shared.StreamRecorder
 import java.io.File
@@ -309,6 +311,7 @@ class MainActivity : Activity() {
      */
     private fun startReplay(files: StreamFiles, recording: File? = null) {
         Thread(Runnable {
+            val meta = StreamMetadata.read(files)
             val reader = try {
                 StreamReader(files)
             } catch (e: Exception) {
@@ -319,13 +322,14 @@ class MainActivity : Activity() {
                 }
                 return@Runnable
             }
-            ui.post { if (!isDestroyed) startReplay(reader, recording) }
+            ui.post { if (!isDestroyed) startReplay(reader, recording, meta?.gravityUp) }
         }, "ecvo-replay-open").start()
     }
 
-    private fun startReplay(reader: StreamReader, recording: File?) {
+    private fun startReplay(reader: StreamReader, recording: File?, gravityUp: DoubleArray?) {
         SessionHolder.camera = null
-        GravitySensor.clear(this) // no gravity in a recording: the first camera's x-z top view
+        // The recording's gravity if it stored one; else the first camera's x-z top view.
+        if (gravityUp != null) GravitySensor.use(this, gravityUp) else GravitySensor.clear(this)
         SessionHolder.resumeLive = false
         SessionHolder.resumeReplay = false
         trajectoryView.clear()
@@ -338,6 +342,7 @@ class MainActivity : Activity() {
         // Set whether or not the start succeeded: a failed start must not export the previous session's stream.
         SessionHolder.streams.onStarted(if (started) recording else null)
         SessionHolder.sessionPointCloud = s.pointCloud
+        SessionHolder.sessionCamera = reader.camera
         render()
     }
 
@@ -369,6 +374,7 @@ class MainActivity : Activity() {
         val started = controller.start(FrameSource.LIVE, s.trackerConfig(setup.frame, FrameSource.LIVE)) { cb -> openCamera(setup, cb) }
         SessionHolder.streams.onStarted(null) // also after a failed start: no earlier session's stream
         SessionHolder.sessionPointCloud = s.pointCloud
+        SessionHolder.sessionCamera = setup.frame
         if (started) {
             setup.notes.forEach { controller.presenter.onNotice(it) }
         }
@@ -406,7 +412,10 @@ class MainActivity : Activity() {
         if (on) {
             val name = SimpleDateFormat("yyyyMMdd-HHmmss", Locale.ROOT).format(Date())
             val dir = File(recordingsDir, name)
-            if (controller.startRecording { cam -> StreamRecorder(dir, cam) }) SessionHolder.streams.onRecording(dir)
+            val meta = { cam: CameraIntrinsics ->
+                DeviceInfo.metadata(this, settings, controller.presenter.status.mode.ifEmpty { null }, cam)
+            }
+            if (controller.startRecording { cam -> StreamRecorder(dir, cam).also { meta(cam).write(dir) } }) SessionHolder.streams.onRecording(dir)
         } else {
             // Returns at once; the queue drains on the recorder's thread, then the toast.
             val app = applicationContext
@@ -505,7 +514,8 @@ class MainActivity : Activity() {
     }
 
     private fun exportPlan(plan: ExportPlan, recordingName: String?, target: Exporter.Target) {
-        exporter.export(plan, recordingName, if (plan.withSession) controller.session else null, SessionHolder.sessionPointCloud, target)
+        val meta = DeviceInfo.metadata(this, settings, controller.presenter.status.mode.ifEmpty { null }, SessionHolder.sessionCamera)
+        exporter.export(plan, recordingName, if (plan.withSession) controller.session else null, SessionHolder.sessionPointCloud, meta, target)
     }
 
     private fun saveSettings(s: AppSettings) = SessionHolder.saveSettings(this, s)

@@ -61,6 +61,9 @@ object SessionHolder {
     /** Whether the live session still waits for its first tracked frame to take gravity (GravitySensor.freeze). */
     @Volatile var gravityPending = false
 
+    /** The intrinsics of the current session's frames (for the export's metadata). */
+    @Volatile var sessionCamera: io.ecvo.shared.CameraIntrinsics? = null
+
     /** Whether the current session builds a point cloud (the setting at its start, not at export). */
     @Volatile var sessionPointCloud = false
 
