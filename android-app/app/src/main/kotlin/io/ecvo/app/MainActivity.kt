@@ -31,7 +31,6 @@ import io.ecvo.Tracker
 import io.ecvo.shared.AppSettings
 import io.ecvo.shared.CameraIntrinsics
 import io.ecvo.shared.ScreenOnSwitch
-import io.ecvo.shared.SettingsMenu
 import io.ecvo.shared.DirectoryFiles
 import io.ecvo.shared.ExportPlan
 import io.ecvo.shared.ExportSelection
@@ -70,6 +69,7 @@ class MainActivity : Activity() {
     private var hasDepthCamera = false
     private val screenOn = ScreenOnSwitch()
     private var previewBitmap: Bitmap? = null
+    private val settingsDialog by lazy { SettingsDialog(this) { kind, d -> keep(kind, d) } }
     private val exporter by lazy { Exporter(this) { msg -> controller.presenter.onNotice(msg); render() } }
 
     private lateinit var stateText: TextView
@@ -133,7 +133,7 @@ class MainActivity : Activity() {
         }
         findViewById<Button>(R.id.reset).setOnClickListener { SessionHolder.resumeLive = false; controller.reset(); trajectoryView.clear(); render() }
         findViewById<Button>(R.id.export).setOnClickListener { chooseExport() }
-        findViewById<Button>(R.id.settings).setOnClickListener { showSettings() }
+        findViewById<Button>(R.id.settings).setOnClickListener { settingsDialog.show() }
         recordButton.setOnClickListener { setRecording(recordButton.isChecked) }
         findViewById<RadioGroup>(R.id.plane).setOnCheckedChangeListener { _, id ->
             trajectoryView.plane = when (id) {
@@ -237,7 +237,7 @@ class MainActivity : Activity() {
     /** Reopens the dialog a rotation closed ([kind] as [keep] named it). */
     private fun reopenDialog(kind: String) {
         when {
-            kind == "settings" -> showSettings()
+            kind == "settings" -> settingsDialog.show()
             kind == "recordings" -> showRecordings()
             kind == "permission" -> onLiveClicked()
             kind.startsWith("recording:") || kind.startsWith("delete:") -> {
@@ -516,37 +516,6 @@ class MainActivity : Activity() {
     private fun exportPlan(plan: ExportPlan, recordingName: String?, target: Exporter.Target) {
         val meta = DeviceInfo.metadata(this, settings, controller.presenter.status.mode.ifEmpty { null }, SessionHolder.sessionCamera)
         exporter.export(plan, recordingName, if (plan.withSession) controller.session else null, SessionHolder.sessionPointCloud, meta, target)
-    }
-
-    private fun saveSettings(s: AppSettings) = SessionHolder.saveSettings(this, s)
-
-    /** One row per setting; tapping a row moves it to its next value. */
-    private fun showSettings() {
-        val s = settings
-        val rows = SettingsMenu.Row.entries
-        val labels = rows.map { "${getString(settingTitle(it))}: ${SettingsMenu.value(s, it)}" }.toTypedArray<CharSequence>()
-        keep("settings", AlertDialog.Builder(this)
-            .setTitle(R.string.settings)
-            .setItems(labels) { _, which ->
-                val row = rows[which]
-                saveSettings(SettingsMenu.step(s, row))
-                if (row == SettingsMenu.Row.REPLAY_SPEED) SessionHolder.replay?.setSpeed(settings.replaySpeed)
-                if (!row.appliesAtOnce) Toast.makeText(this, R.string.settings_applies, Toast.LENGTH_SHORT).show()
-                showSettings()
-            }
-            .setNegativeButton(R.string.close, null)
-            .show())
-    }
-
-    private fun settingTitle(row: SettingsMenu.Row): Int = when (row) {
-        SettingsMenu.Row.PRESET -> R.string.settings_preset
-        SettingsMenu.Row.MODE -> R.string.settings_mode
-        SettingsMenu.Row.CONFIDENCE -> R.string.settings_confidence
-        SettingsMenu.Row.PREVIEW -> R.string.settings_preview
-        SettingsMenu.Row.POINT_CLOUD -> R.string.settings_cloud
-        SettingsMenu.Row.LIVE_CAMERAS -> R.string.settings_live_cameras
-        SettingsMenu.Row.RESOLUTION -> R.string.settings_resolution
-        SettingsMenu.Row.REPLAY_SPEED -> R.string.settings_speed
     }
 
     /** Polls the session and redraws. */
