@@ -8,6 +8,8 @@ import android.hardware.camera2.CameraDevice
 import android.hardware.camera2.CameraManager
 import android.hardware.camera2.CameraMetadata
 import android.hardware.camera2.CaptureRequest
+import android.hardware.camera2.CaptureResult
+import android.hardware.camera2.TotalCaptureResult
 import android.media.ImageReader
 import android.os.Build
 import android.os.Handler
@@ -20,6 +22,7 @@ import io.ecvo.shared.ColourWatch
 import io.ecvo.shared.ConfidencePolicy
 import io.ecvo.shared.DepthDecoder
 import io.ecvo.shared.DepthRemap
+import io.ecvo.shared.ExposureLock
 import io.ecvo.shared.FailureAction
 import io.ecvo.shared.FramePairer
 import io.ecvo.shared.GrayPlane
@@ -111,7 +114,7 @@ class DepthCameraSource(
     private val registered = ByteArray(setup.frame.pixels)
     private val y = ByteArray(setup.colour?.let { it.size.width * it.size.height } ?: 0)
     private var confidenceNoted = false
-    private var colourFrames = 0
+    private val exposure = ExposureLock()
     private var colourRequest: CaptureRequest.Builder? = null
     @Volatile private var running = false
     @Volatile var mode: LiveMode = setup.mode.mode
@@ -164,21 +167,29 @@ class DepthCameraSource(
         } finally {
             img.close()
         }
-        colourFrames++
-        if (colourFrames == AE_LOCK_AFTER_FRAMES) lockExposure()
     }
 
     /**
-     * Locks the colour camera's auto-exposure once it had [AE_LOCK_AFTER_FRAMES] frames to
-     * converge: the tracker's photometric terms assume a point keeps its brightness, which
-     * free-running exposure breaks whenever the view changes.
+     * Watches the colour stream's capture results and locks auto-exposure and white
+     * balance once both converged ([ExposureLock]): the tracker's photometric terms
+     * assume a point keeps its brightness.
      */
-    private fun lockExposure() {
+    private inner class ExposureWatch : CameraCaptureSession.CaptureCallback() {
+        override fun onCaptureCompleted(session: CameraCaptureSession, request: CaptureRequest, result: TotalCaptureResult) = guarded("colour exposure") {
+            val action = exposure.onResult(result.get(CaptureResult.CONTROL_AE_STATE), result.get(CaptureResult.CONTROL_AWB_STATE))
+            if (action == ExposureLock.Action.WAIT) return@guarded
+            if (action == ExposureLock.Action.LOCK_UNCONVERGED) callbacks.notice(ExposureLock.UNCONVERGED_NOTE)
+            lockExposure(session)
+        }
+    }
+
+    private fun lockExposure(session: CameraCaptureSession) {
         val id = setup.colour?.id ?: return
-        val session = sessions[id] ?: return
+        if (sessions[id] !== session) return
         val request = colourRequest ?: return
         guarded("camera $id: locking exposure") {
             request.set(CaptureRequest.CONTROL_AE_LOCK, true)
+            request.set(CaptureRequest.CONTROL_AWB_LOCK, true)
             session.setRepeatingRequest(request.build(), null, handler)
         }
     }
@@ -276,12 +287,12 @@ class DepthCameraSource(
                                 sessions[id] = session
                                 // Throws CameraAccessException, IllegalStateException (closed) or IllegalArgumentException.
                                 guarded("camera $id: starting the stream") {
-                                    // Colour: TEMPLATE_RECORD (a steady frame rate), exposure locked after it converged.
+                                    // Colour: TEMPLATE_RECORD (a steady frame rate), exposure and white balance locked once converged (ExposureWatch).
                                     val template = if (camera == LiveCamera.COLOUR) CameraDevice.TEMPLATE_RECORD else CameraDevice.TEMPLATE_PREVIEW
                                     val request = device.createCaptureRequest(template)
                                     request.addTarget(reader.surface)
                                     if (camera == LiveCamera.COLOUR) colourRequest = request
-                                    session.setRepeatingRequest(request.build(), null, handler)
+                                    session.setRepeatingRequest(request.build(), if (camera == LiveCamera.COLOUR) ExposureWatch() else null, handler)
                                 }
                             }
 
@@ -336,9 +347,6 @@ class DepthCameraSource(
     }
 
     companion object {
-        /** Colour frames the auto-exposure has to converge before it is locked (about 1 s). */
-        private const val AE_LOCK_AFTER_FRAMES = 30
-
         /** Wait before reopening the depth camera alone, after closing both. */
         private const val REOPEN_DELAY_MS = 300L
 

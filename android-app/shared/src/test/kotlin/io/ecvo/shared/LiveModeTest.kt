@@ -112,4 +112,26 @@ class LiveModeTest {
         p.onStarted(FrameSource.REPLAY, 0)
         assertEquals("", p.status.mode)
     }
+
+    @Test
+    fun exposureAndWhiteBalanceAreLockedOnceConvergedOrAtTheTimeout() {
+        val converging = ExposureLock(minFrames = 3, maxFrames = 10)
+        // Searching (1) for 5 frames, then converged (2): locked at the first converged result.
+        val actions = (1..8).map { i -> converging.onResult(if (i <= 5) 1 else 2, 2) }
+        assertTrue(actions.take(5).all { it == ExposureLock.Action.WAIT })
+        assertEquals(ExposureLock.Action.LOCK, actions[5])
+        assertTrue(actions.drop(6).all { it == ExposureLock.Action.WAIT }) // once
+        // White balance still searching keeps it unlocked.
+        val awb = ExposureLock(minFrames = 1, maxFrames = 10)
+        assertEquals(ExposureLock.Action.WAIT, awb.onResult(2, 1))
+        assertEquals(ExposureLock.Action.LOCK, awb.onResult(2, 2))
+        // Never converging: locked at the timeout, with the note.
+        val never = ExposureLock(minFrames = 3, maxFrames = 10)
+        val n = (1..12).map { never.onResult(1, 1) }
+        assertEquals(ExposureLock.Action.LOCK_UNCONVERGED, n[9])
+        assertEquals(1, n.count { it != ExposureLock.Action.WAIT })
+        // A camera reporting no states (LEGACY): locked after minFrames.
+        val legacy = ExposureLock(minFrames = 3, maxFrames = 10)
+        assertEquals(listOf(ExposureLock.Action.WAIT, ExposureLock.Action.WAIT, ExposureLock.Action.LOCK), (1..3).map { legacy.onResult(null, null) })
+    }
 }
