@@ -238,6 +238,7 @@ class SessionController(
             // that long); draw on from the window's start.
             if (trajectory.nextIndex < stats.trajectoryStart) trajectory.skipTo(stats.trajectoryStart)
             trajectory.append(t.trajectorySince(trajectory.nextIndex))
+            presenter.onDistance(trajectory.distanceM)
             ts
         } catch (e: IllegalStateException) {
             Tracker.NO_POSE // closed between the check and the calls

@@ -17,10 +17,10 @@ data class StatusText(
     val kind: StatusKind,
     /** "12.3 ms/frame" or "– ms/frame" before the first tracked frame. */
     val timing: String,
-    /** "refs L1 12 · L2 3". */
+    /** "refs L1 12 · L2 3 · 1.25 m travelled" (the distance once a frame was tracked). */
     val references: String,
     /**
-     * "120 frames · 3 dropped · 1 lost" (and "· 5 without colour" for live depth frames
+     * "120 frames · 3 dropped · 1 lost · 1 re-anchored" (started afresh after a loss; and "· 5 without colour" for live depth frames
      * dropped unpaired, "· 4 not recorded" for frames the recorder could not keep up
      * with, "· 2 bad timestamps skipped" for frames the tracker refused).
      */
@@ -63,6 +63,7 @@ class TrackingPresenter(
     private var recordingDropped = 0L
     private var liveMode: LiveMode? = null
     private var paused = false
+    private var distanceM = 0.0
     private val notices = LinkedHashSet<String>()
 
     /** The result of looking for a camera with DEPTH_OUTPUT. */
@@ -80,6 +81,7 @@ class TrackingPresenter(
         fps = 0.0
         droppedNoColour = 0
         skippedTimestamps = 0
+        distanceM = 0.0
         liveMode = null
         state = TrackingState.INITIALISING
         stats = TrackerStats.EMPTY
@@ -121,6 +123,9 @@ class TrackingPresenter(
         this.droppedNoColour = droppedNoColour
     }
 
+    /** The length of the tracked path so far, in metres. */
+    fun onDistance(metres: Double) { distanceM = metres }
+
     /** The live source's mode (it may fall back to depth alone during the session). */
     fun onLiveMode(mode: LiveMode) { liveMode = mode }
 
@@ -160,7 +165,8 @@ class TrackingPresenter(
                 else -> "Lost" to StatusKind.LOST
             }
             val timing = if (stats.framesTracked > 0) String.format(Locale.ROOT, "%.1f ms/frame", stats.totalMs) else "– ms/frame"
-            val refs = "refs L1 ${stats.referencesL1} · L2 ${stats.referencesL2}"
+            val refs = "refs L1 ${stats.referencesL1} · L2 ${stats.referencesL2}" +
+                if (stats.framesTracked > 0) String.format(Locale.ROOT, " · %.2f m travelled", distanceM) else ""
             val frames = buildString {
                 append(stats.framesTracked).append(" frames")
                 if (stats.framesDropped > 0) append(" · ").append(stats.framesDropped).append(" dropped")
@@ -168,6 +174,7 @@ class TrackingPresenter(
                 if (recordingDropped > 0) append(" · ").append(recordingDropped).append(" not recorded")
                 if (skippedTimestamps > 0) append(" · ").append(skippedTimestamps).append(" bad timestamps skipped")
                 if (stats.lostFrames > 0) append(" · ").append(stats.lostFrames).append(" lost")
+                if (stats.reanchors > 0) append(" · ").append(stats.reanchors).append(" re-anchored")
             }
             val stages = if (stats.framesTracked == 0L) "" else String.format(
                 Locale.ROOT, "%.1f fps · filter %.1f · tracker %.1f · latency %.1f ms", fps, stats.filterMs, stats.trackerMs, stats.latencyMs,
