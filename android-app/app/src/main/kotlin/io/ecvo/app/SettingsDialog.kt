@@ -24,8 +24,19 @@ class SettingsDialog(private val activity: Activity, private val keep: (String, 
                 if (!row.appliesAtOnce) Toast.makeText(activity, R.string.settings_applies, Toast.LENGTH_SHORT).show()
                 show()
             }
+            .setNeutralButton(R.string.licences) { _, _ -> showLicences() }
             .setNegativeButton(R.string.close, null)
             .show())
+    }
+
+    /** The licence notices of the app, its native library's crates and the Kotlin library (res/raw/notices.txt). */
+    private fun showLicences() {
+        val text = activity.resources.openRawResource(R.raw.notices).use { String(it.readBytes(), Charsets.UTF_8) }
+        AlertDialog.Builder(activity)
+            .setTitle(R.string.licences)
+            .setMessage(text)
+            .setNegativeButton(R.string.close, null)
+            .show()
     }
 
     private fun settingTitle(row: SettingsMenu.Row): Int = when (row) {
