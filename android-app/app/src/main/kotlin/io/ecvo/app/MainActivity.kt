@@ -37,8 +37,6 @@ import io.ecvo.shared.ExportSelection
 import io.ecvo.shared.FrameSource
 import io.ecvo.shared.PreviewKind
 import io.ecvo.shared.ProjectionPlane
-import io.ecvo.shared.RecordingEntry
-import io.ecvo.shared.Recordings
 import io.ecvo.shared.SessionController
 import io.ecvo.shared.StatusKind
 import io.ecvo.shared.StreamFiles
@@ -70,6 +68,13 @@ class MainActivity : Activity() {
     private val screenOn = ScreenOnSwitch()
     private var previewBitmap: Bitmap? = null
     private val settingsDialog by lazy { SettingsDialog(this) { kind, d -> keep(kind, d) } }
+    private val recordingsDialog by lazy {
+        RecordingsDialog(
+            this, recordingsDir, { kind, d -> keep(kind, d) },
+            replay = { r -> startReplay(DirectoryFiles(r.dir), r.dir) },
+            export = { r, target -> exportPlan(ExportSelection.forRecording(r.dir, controller.session != null, SessionHolder.streams.stream), r.name, target) },
+        )
+    }
     private val exporter by lazy { Exporter(this) { msg -> controller.presenter.onNotice(msg); render() } }
 
     private lateinit var stateText: TextView
@@ -123,7 +128,7 @@ class MainActivity : Activity() {
         SessionHolder.preview = settings.preview
 
         findViewById<Button>(R.id.replay_sample).setOnClickListener { startReplay(AssetStreamFiles(assets)) }
-        findViewById<Button>(R.id.recordings).setOnClickListener { showRecordings() }
+        findViewById<Button>(R.id.recordings).setOnClickListener { recordingsDialog.show() }
         liveButton.setOnClickListener { onLiveClicked() }
         findViewById<Button>(R.id.stop).setOnClickListener { SessionHolder.resumeLive = false; controller.stopSource(); render() }
         pauseButton.setOnClickListener {
@@ -238,24 +243,9 @@ class MainActivity : Activity() {
     private fun reopenDialog(kind: String) {
         when {
             kind == "settings" -> settingsDialog.show()
-            kind == "recordings" -> showRecordings()
+            kind == "recordings" -> recordingsDialog.show()
             kind == "permission" -> onLiveClicked()
-            kind.startsWith("recording:") || kind.startsWith("delete:") -> {
-                val name = kind.substringAfter(':')
-                val root = recordingsDir
-                Thread(Runnable {
-                    val r = try {
-                        Recordings.list(root).firstOrNull { it.name == name }
-                    } catch (e: Exception) {
-                        null
-                    }
-                    ui.post {
-                        if (r != null && !isFinishing && !isDestroyed) {
-                            if (kind.startsWith("delete:")) confirmDelete(r) else showRecordingActions(r)
-                        }
-                    }
-                }, "ecvo-recordings").start()
-            }
+            kind.startsWith("recording:") || kind.startsWith("delete:") -> recordingsDialog.reopen(kind)
         }
     }
 
@@ -429,73 +419,6 @@ class MainActivity : Activity() {
             }
         }
         render()
-    }
-
-    /** Lists the recordings on a worker thread (it reads every folder), then shows them. */
-    private fun showRecordings() {
-        val root = recordingsDir
-        Thread(Runnable {
-            val list = try {
-                Recordings.list(root)
-            } catch (e: Exception) {
-                emptyList()
-            }
-            ui.post { if (!isFinishing && !isDestroyed) showRecordingList(list) }
-        }, "ecvo-recordings").start()
-    }
-
-    private fun showRecordingList(list: List<RecordingEntry>) {
-        if (list.isEmpty()) {
-            Toast.makeText(this, R.string.no_recordings, Toast.LENGTH_LONG).show()
-            return
-        }
-        val labels = list.map { String.format(Locale.ROOT, "%s · %d frames · %.1f MB", it.name, it.frames, it.bytes / 1e6) }.toTypedArray<CharSequence>()
-        keep("recordings", AlertDialog.Builder(this)
-            .setTitle(R.string.recordings_title)
-            .setItems(labels) { _, which -> showRecordingActions(list[which]) }
-            .setNegativeButton(R.string.close, null)
-            .show())
-    }
-
-    /** Replay, export or delete one recording. */
-    private fun showRecordingActions(r: RecordingEntry) {
-        val actions = arrayOf<CharSequence>(
-            getString(R.string.recording_replay), getString(R.string.recording_export), getString(R.string.export_downloads), getString(R.string.recording_delete),
-        )
-        keep("recording:" + r.name, AlertDialog.Builder(this)
-            .setTitle(r.name)
-            .setItems(actions) { _, which ->
-                when (which) {
-                    0 -> startReplay(DirectoryFiles(r.dir), r.dir)
-                    1, 2 -> exportPlan(
-                        ExportSelection.forRecording(r.dir, controller.session != null, SessionHolder.streams.stream), r.name,
-                        if (which == 1) Exporter.Target.SHARE else Exporter.Target.DOWNLOADS,
-                    )
-                    else -> confirmDelete(r)
-                }
-            }
-            .setNegativeButton(R.string.close, null)
-            .show())
-    }
-
-    private fun confirmDelete(r: RecordingEntry) {
-        keep("delete:" + r.name, AlertDialog.Builder(this)
-            .setTitle(R.string.recording_delete)
-            .setMessage(getString(R.string.recording_delete_confirm, r.name, r.frames))
-            .setPositiveButton(R.string.recording_delete) { _, _ ->
-                // Not the folder being recorded into, nor the one a running replay reads.
-                val inUse = if (controller.presenter.status.recording || controller.running == FrameSource.REPLAY) SessionHolder.streams.stream else null
-                val root = recordingsDir
-                Thread(Runnable {
-                    val ok = Recordings.delete(root, r.dir, inUse)
-                    ui.post {
-                        if (ok) SessionHolder.streams.onDeleted(r.dir)
-                        Toast.makeText(this, if (ok) getString(R.string.recording_deleted, r.name) else getString(R.string.recording_not_deleted, r.name), Toast.LENGTH_LONG).show()
-                    }
-                }, "ecvo-delete").start()
-            }
-            .setNegativeButton(R.string.close, null)
-            .show())
     }
 
     /** The Share button: the session with the stream it replays or recorded, shared or saved to Downloads. */
