@@ -285,6 +285,13 @@ class MainActivity : Activity() {
         render()
     }
 
+    /** The file picker's answer (Recordings… → Import…). */
+    override fun onActivityResult(requestCode: Int, resultCode: Int, data: Intent?) {
+        super.onActivityResult(requestCode, resultCode, data)
+        val uri = data?.data
+        if (requestCode == RecordingsDialog.REQUEST_IMPORT && resultCode == RESULT_OK && uri != null) recordingsDialog.onImportPicked(uri)
+    }
+
     private fun openAppSettings() {
         try {
             startActivity(Intent(Settings.ACTION_APPLICATION_DETAILS_SETTINGS, Uri.fromParts("package", packageName, null)))

@@ -4,11 +4,18 @@ import android.app.Activity
 import android.app.AlertDialog
 import android.os.Handler
 import android.os.Looper
+import android.content.ActivityNotFoundException
+import android.content.Intent
+import android.net.Uri
 import android.widget.Toast
 import io.ecvo.shared.FrameSource
 import io.ecvo.shared.RecordingEntry
 import io.ecvo.shared.Recordings
+import io.ecvo.shared.StreamImport
 import java.io.File
+import java.io.IOException
+import java.text.SimpleDateFormat
+import java.util.Date
 import java.util.Locale
 
 /**
@@ -42,13 +49,19 @@ class RecordingsDialog(
 
     private fun showRecordingList(list: List<RecordingEntry>) {
         if (list.isEmpty()) {
-            Toast.makeText(activity, R.string.no_recordings, Toast.LENGTH_LONG).show()
+            keep("recordings", AlertDialog.Builder(activity)
+                .setTitle(R.string.recordings_title)
+                .setMessage(R.string.no_recordings)
+                .setNeutralButton(R.string.import_stream) { _, _ -> pickZip() }
+                .setNegativeButton(R.string.close, null)
+                .show())
             return
         }
         val labels = list.map { String.format(Locale.ROOT, "%s · %d frames · %.1f MB", it.name, it.frames, it.bytes / 1e6) }.toTypedArray<CharSequence>()
         keep("recordings", AlertDialog.Builder(activity)
             .setTitle(R.string.recordings_title)
             .setItems(labels) { _, which -> showRecordingActions(list[which]) }
+            .setNeutralButton(R.string.import_stream) { _, _ -> pickZip() }
             .setNegativeButton(R.string.close, null)
             .show())
     }
@@ -90,6 +103,39 @@ class RecordingsDialog(
             .show())
     }
 
+    /** Asks the system's file picker for a zip (an export of this app, or any zip of a TUM-layout stream). */
+    private fun pickZip() {
+        val pick = Intent(Intent.ACTION_OPEN_DOCUMENT).addCategory(Intent.CATEGORY_OPENABLE).setType("application/zip")
+        try {
+            activity.startActivityForResult(pick, REQUEST_IMPORT)
+        } catch (e: ActivityNotFoundException) {
+            Toast.makeText(activity, e.message ?: "No file picker", Toast.LENGTH_LONG).show()
+        }
+    }
+
+    /**
+     * The activity's result for [REQUEST_IMPORT]: unpacks the chosen zip into the recordings
+     * folder on a worker thread ([StreamImport]), then lists the recordings again.
+     */
+    fun onImportPicked(uri: Uri) {
+        val app = activity.applicationContext
+        val name = "import-" + SimpleDateFormat("yyyyMMdd-HHmmss", Locale.ROOT).format(Date())
+        Toast.makeText(activity, R.string.importing, Toast.LENGTH_SHORT).show()
+        Thread(Runnable {
+            val text = try {
+                val input = app.contentResolver.openInputStream(uri) ?: throw IOException("cannot open $uri")
+                val dir = input.use { StreamImport.fromZip(it, root, name) }
+                app.getString(R.string.imported, dir.name)
+            } catch (e: Exception) {
+                app.getString(R.string.import_failed, e.message ?: e.javaClass.simpleName)
+            }
+            ui.post {
+                Toast.makeText(app, text, Toast.LENGTH_LONG).show()
+                if (!activity.isFinishing && !activity.isDestroyed) show()
+            }
+        }, "ecvo-import").start()
+    }
+
     /** Reopens a recording's actions or its delete confirmation after a rotation ([kind]: "recording:NAME" or "delete:NAME"). */
     fun reopen(kind: String) {
         val name = kind.substringAfter(':')
@@ -105,5 +151,10 @@ class RecordingsDialog(
                 }
             }
         }, "ecvo-recordings").start()
+    }
+
+    companion object {
+        /** The request code of the file picker (MainActivity.onActivityResult forwards it). */
+        const val REQUEST_IMPORT: Int = 7
     }
 }
