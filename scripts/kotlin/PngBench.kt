@@ -12,6 +12,12 @@ import java.util.zip.Deflater
  * filter / compression settings on the frames of a real stream, at its size and halved.
  * Usage: PngBench STREAM_DIR [FRAMES] [REPEATS]. Prints median, mean, p95 (ms per frame)
  * and bytes per frame, and the ratio of each median to the first setting's (the old default).
+ * Run (after scripts/kotlin/test-kotlin.sh built target/kotlin/shared.jar and tracker.jar), K being kotlinc's
+ * npm folder (~/.cache/ecvo/kotlinc/node_modules/kotlin-compiler):
+ *   $K/bin/kotlinc -jvm-target 17 -cp target/kotlin/shared.jar:target/kotlin/tracker.jar \
+ *     -d target/kotlin/bench scripts/kotlin/PngBench.kt
+ *   java -cp target/kotlin/bench:target/kotlin/shared.jar:target/kotlin/tracker.jar:$K/lib/kotlin-stdlib.jar \
+ *     io.ecvo.bench.PngBenchKt /work/shared/datasets/tum_fr1_xyz_full300 30 3
  */
 fun main(args: Array<String>) {
     val dir = File(args.getOrNull(0) ?: error("usage: PngBench STREAM_DIR [FRAMES] [REPEATS]"))

@@ -100,8 +100,8 @@ class StreamRecorder(override val dir: File, val camera: CameraIntrinsics) : Fra
     companion object {
         /**
          * The recorder's PNG settings: the SUB filter and Huffman-only deflate. On the
-         * 640x480 frames of TUM fr1/xyz this encodes a frame's two PNGs in 0.38x the
-         * time of adaptive filtering at deflate level 1 (the old setting), at about the
+         * 640x480 frames of TUM fr1/xyz this encodes a frame's two PNGs in 0.38x-0.39x the
+         * median time of adaptive filtering at deflate level 1 (the old setting), at about the
          * same size (`scripts/kotlin/PngBench.kt`; figures in `android-app/README.md`).
          */
         val FILTER: PngFilter = PngFilter.SUB
