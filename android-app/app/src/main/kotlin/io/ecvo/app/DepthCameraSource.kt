@@ -347,6 +347,9 @@ class DepthCameraSource(
     }
 
     companion object {
+        /** Numeric camera ids tried beyond `getCameraIdList` ("0" to "15"). */
+        private const val HIDDEN_IDS_PROBED = 16
+
         /** Wait before reopening the depth camera alone, after closing both. */
         private const val REOPEN_DELAY_MS = 300L
 
@@ -354,9 +357,23 @@ class DepthCameraSource(
          * Whether some camera has the `DEPTH_OUTPUT` capability (readable without the
          * CAMERA permission; the calibration is read later, by [find]).
          */
-        fun hasDepthCamera(manager: CameraManager): Boolean = manager.cameraIdList.any { id ->
-            manager.getCameraCharacteristics(id).get(CameraCharacteristics.REQUEST_AVAILABLE_CAPABILITIES)
+        fun hasDepthCamera(manager: CameraManager): Boolean = cameraIds(manager).any { id ->
+            characteristics(manager, id)?.get(CameraCharacteristics.REQUEST_AVAILABLE_CAPABILITIES)
                 ?.contains(CameraMetadata.REQUEST_AVAILABLE_CAPABILITIES_DEPTH_OUTPUT) == true
+        }
+
+        /**
+         * The listed camera ids, then the small numeric ids the list leaves out: some phones
+         * keep their ToF camera out of `getCameraIdList` but describe and open it by id.
+         */
+        private fun cameraIds(manager: CameraManager): List<String> =
+            (manager.cameraIdList.toList() + (0 until HIDDEN_IDS_PROBED).map { it.toString() }).distinct()
+
+        /** The characteristics of camera [id], or null if the phone has no such camera. */
+        private fun characteristics(manager: CameraManager, id: String): CameraCharacteristics? = try {
+            manager.getCameraCharacteristics(id)
+        } catch (e: IllegalArgumentException) {
+            null
         }
 
         /**
@@ -372,11 +389,15 @@ class DepthCameraSource(
             depthOnlyPairs: Set<String> = emptySet(),
             resolution: TrackingResolution = TrackingResolution.AUTO,
         ): Setup? {
-            val ids = manager.cameraIdList
-            // A back-facing depth camera first (the usual world-facing ToF), then the others.
-            val ordered = ids.sortedBy { id -> if (manager.getCameraCharacteristics(id).get(CameraCharacteristics.LENS_FACING) == CameraMetadata.LENS_FACING_BACK) 0 else 1 }
+            // Listed and unlisted ids that the phone describes.
+            val ids = cameraIds(manager).filter { characteristics(manager, it) != null }
+            // Listed cameras before unlisted ones; within each, back-facing first (the usual world-facing ToF).
+            val listed = manager.cameraIdList.toSet()
+            val ordered = ids.sortedWith(
+                compareBy<String>({ if (it in listed) 0 else 1 }, { if (characteristics(manager, it)?.get(CameraCharacteristics.LENS_FACING) == CameraMetadata.LENS_FACING_BACK) 0 else 1 }),
+            )
             for (depthId in ordered) {
-                val dc = manager.getCameraCharacteristics(depthId)
+                val dc = characteristics(manager, depthId) ?: continue
                 val caps = dc.get(CameraCharacteristics.REQUEST_AVAILABLE_CAPABILITIES) ?: continue
                 if (CameraMetadata.REQUEST_AVAILABLE_CAPABILITIES_DEPTH_OUTPUT !in caps) continue
                 val sizes = dc.get(CameraCharacteristics.SCALER_STREAM_CONFIGURATION_MAP)?.getOutputSizes(ImageFormat.DEPTH16)
@@ -384,8 +405,9 @@ class DepthCameraSource(
                 // Tracked at the stream's native size (240x180 stays 240x180): no crop, no upsampling.
                 val depthSize = StreamSizes.nativeDepth(sizes) ?: continue
                 val facing = dc.get(CameraCharacteristics.LENS_FACING)
-                // Colour cameras facing the same way; the largest sensor is the "primary" one.
-                val colours = ids.filter { id ->
+                // Listed colour cameras facing the same way (an unlisted one may be a physical
+                // camera only its logical camera opens); the largest sensor is the "primary" one.
+                val colours = manager.cameraIdList.filter { id ->
                     id != depthId && manager.getCameraCharacteristics(id).let { c ->
                         c.get(CameraCharacteristics.LENS_FACING) == facing &&
                             c.get(CameraCharacteristics.REQUEST_AVAILABLE_CAPABILITIES)
