@@ -16,6 +16,8 @@
 #                         scripts/android/install-standin-ndk.sh); ANDROID_NDK_ROOT is accepted too.
 #   CARGO_TARGET_DIR      honoured as usual.
 #
+# DT_SONAME: every ABI's link gets -C link-arg=-Wl,-soname,lib<package>.so (see below).
+#
 # 16 KB pages: NDK r28+ links 64-bit ABIs with 16 KB max-page-size by default and cargo-ndk
 # adds -Wl,-z,max-page-size=16384 for 64-bit ABIs with NDK <= r27. This script additionally
 # passes -C link-arg=-Wl,-z,max-page-size=16384 for every ABI that neither covers (32-bit ABIs
@@ -93,6 +95,21 @@ for abi in "${ABIS[@]}"; do
   fi
 done
 
+# DT_SONAME: rustc links a cdylib without -soname, and neither the NDK's clang nor cargo-ndk adds
+# one (the NDK's CMake and ndk-build do). Android identifies a loaded library by it
+# (scripts/android/check-so.sh requires it), so every ABI's link sets it to the file's name.
+lib="lib$(echo "$PACKAGE" | tr '-' '_').so"
+for abi in "${ABIS[@]}"; do
+  t="$(abi_rust_target "$abi")"
+  var="CARGO_TARGET_$(echo "$t" | tr 'a-z-' 'A-Z_')_RUSTFLAGS"
+  if [ -n "${RUSTFLAGS:-}" ]; then
+    [[ "$RUSTFLAGS" == *-soname* ]] || export RUSTFLAGS="$RUSTFLAGS -C link-arg=-Wl,-soname,$lib"
+  else
+    cur="${!var:-}"
+    [[ "$cur" == *-soname* ]] || export "$var=${cur:+$cur }-C link-arg=-Wl,-soname,$lib"
+  fi
+done
+
 args=()
 for abi in "${ABIS[@]}"; do args+=(-t "$abi"); done
 prof_args=(--profile "$PROFILE"); [ "$PROFILE" = release ] && prof_args=(--release)
@@ -103,7 +120,6 @@ cd "$(dirname "$MANIFEST")"
 set -x
 cargo ndk "${args[@]}" -P "$MIN_SDK" -o "$OUT" --manifest-path "$MANIFEST" build "${prof_args[@]}" -p "$PACKAGE" ${EXTRA[@]+"${EXTRA[@]}"}
 { set +x; } 2>/dev/null
-lib="lib$(echo "$PACKAGE" | tr '-' '_').so"
 for abi in "${ABIS[@]}"; do
   [ -f "$OUT/$abi/$lib" ] || die "cargo ndk finished but $OUT/$abi/$lib is missing (is $PACKAGE a cdylib?)"
   log "built $OUT/$abi/$lib ($(stat -c %s "$OUT/$abi/$lib") bytes)"

@@ -40,6 +40,8 @@
 #      With ECVO_JNI_REGISTER_NATIVES=1, declared methods may instead be registered at run time
 #      (RegisterNatives in an exported JNI_OnLoad, which is then required); those are listed, not checked.
 #   5. DT_NEEDED only lists libc.so, libm.so, libdl.so, liblog.so, libandroid.so.
+#   6. DT_SONAME is set, is a library file name (lib<name>.so), and equals the file's name when
+#      the file is called lib*.so.
 set -euo pipefail
 HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 # shellcheck source=lib.sh
@@ -112,6 +114,20 @@ for n in needed:
     if n not in allowed_needed:
         errors.append(f"NEEDED {n} is not allowed (only {', '.join(allowed_needed)}; "
                       "libc++_shared.so etc. would have to be shipped in the APK)")
+
+# 6. SONAME ---------------------------------------------------------------------------------
+# Android's linker identifies a loaded library by DT_SONAME (required for apps targeting API
+# 23+; without it the linker falls back to the file name and warns). It must name the file
+# the APK ships (lib<crate>.so): when the checked file is called lib*.so, the same name.
+sonames = re.findall(r"\(SONAME\)\s+Library soname: \[([^\]]+)\]", read("d"))
+base = os.path.basename(so)
+if not sonames:
+    errors.append("no DT_SONAME: link with -Wl,-soname,<file name> (scripts/build-android.sh passes "
+                  "-C link-arg=-Wl,-soname,lib<crate>.so; the NDK's build systems do the same)")
+elif not re.fullmatch(r"lib[A-Za-z0-9_]+\.so", sonames[0]):
+    errors.append(f"DT_SONAME is '{sonames[0]}', not a library file name lib<name>.so")
+elif base.startswith("lib") and base.endswith(".so") and sonames[0] != base:
+    errors.append(f"DT_SONAME is '{sonames[0]}' but the file is {base}")
 
 # dynamic symbols ---------------------------------------------------------------------------
 defined, undefined = {}, {}

@@ -17,7 +17,8 @@
 #   3. check-so.sh rejects, each with its own message: a library linked with 4 KB pages, a
 #      library checked against the wrong ABI, a Kotlin declaration without its Java_ symbol,
 #      an undefined symbol newer than minSdk (getentropy, API 28), a NEEDED libc++_shared.so,
-#      overloaded external funs without @JvmName, and a companion-object external fun.
+#      overloaded external funs without @JvmName, a companion-object external fun, a library
+#      linked without DT_SONAME, and one whose DT_SONAME is not its file name.
 set -euo pipefail
 HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 # shellcheck source=lib.sh
@@ -280,6 +281,14 @@ clang-22 --target="$(abi_clang_target "$ABI")$ECVO_MIN_SDK" -nostdlib -shared -f
   -Wl,-soname,libc++_shared.so -x c /dev/null -o "$WORK/libc++_shared.so"
 timed "selftest: link libc++_shared variant" variant cxxshared -- -C link-arg=-Wl,--no-as-needed -C "link-arg=$WORK/libc++_shared.so"
 expect_reject "NEEDED libc++_shared.so" "$WORK/cxxshared.so" "$ABI" "$SCRATCH/kotlin" 'NEEDED.*libc\+\+_shared'
+
+# Linked without build-android.sh's -soname (as cargo-ndk alone links it): no DT_SONAME.
+timed "selftest: link variant without SONAME" variant nosoname
+expect_reject "no DT_SONAME" "$WORK/nosoname.so" "$ABI" "$SCRATCH/kotlin" 'no DT_SONAME'
+# A SONAME that is not the shipped file's name.
+timed "selftest: link variant with another SONAME" variant othersoname -- -C link-arg=-Wl,-soname,libother.so
+cp "$WORK/othersoname.so" "$WORK/libjni_scratch.so"
+expect_reject "SONAME not the file name" "$WORK/libjni_scratch.so" "$ABI" "$SCRATCH/kotlin" "DT_SONAME is 'libother.so' but the file is libjni_scratch.so"
 
 print_times >&2
 echo "selftest: $pass passed, $fail failed"

@@ -78,6 +78,8 @@ pub mod handles;
 mod layout;
 mod limits;
 mod natives;
+#[cfg(any(target_os = "linux", target_os = "android"))]
+mod soname;
 mod tracker;
 
 pub use config::{InitArgs, memory_budget, set_memory_budget};
@@ -92,7 +94,8 @@ pub use tracker::NativeTracker;
 use jni::sys::jint;
 
 /// Called by the JVM when the library is loaded: initialises logging once (Android's
-/// logcat through `android_logger`; elsewhere whatever `log` backend the host set up).
+/// logcat through `android_logger`; elsewhere whatever `log` backend the host set up), and
+/// warns there when the library carries no `DT_SONAME`.
 ///
 /// # Safety
 ///
@@ -108,5 +111,12 @@ pub extern "system" fn JNI_OnLoad(
             .with_max_level(log::LevelFilter::Info)
             .with_tag("ecvo"),
     );
+    #[cfg(any(target_os = "linux", target_os = "android"))]
+    if soname::object_has_soname(JNI_OnLoad as *const std::ffi::c_void) == Some(false) {
+        log::warn!(
+            "libecvo_jni.so has no DT_SONAME: Android's linker then identifies it by its file name \
+             (build it with scripts/build-android.sh, which links with -soname)"
+        );
+    }
     jni::sys::JNI_VERSION_1_6
 }

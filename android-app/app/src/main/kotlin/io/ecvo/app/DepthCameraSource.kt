@@ -2,13 +2,14 @@ package io.ecvo.app
 
 import android.annotation.SuppressLint
 import android.graphics.ImageFormat
-import android.hardware.camera2.CameraAccessException
 import android.hardware.camera2.CameraCaptureSession
 import android.hardware.camera2.CameraCharacteristics
 import android.hardware.camera2.CameraDevice
 import android.hardware.camera2.CameraManager
 import android.hardware.camera2.CameraMetadata
 import android.hardware.camera2.CaptureRequest
+import android.hardware.camera2.CaptureResult
+import android.hardware.camera2.TotalCaptureResult
 import android.media.ImageReader
 import android.os.Build
 import android.os.Handler
@@ -21,6 +22,7 @@ import io.ecvo.shared.ColourWatch
 import io.ecvo.shared.ConfidencePolicy
 import io.ecvo.shared.DepthDecoder
 import io.ecvo.shared.DepthRemap
+import io.ecvo.shared.ExposureLock
 import io.ecvo.shared.FailureAction
 import io.ecvo.shared.FramePairer
 import io.ecvo.shared.GrayPlane
@@ -28,6 +30,8 @@ import io.ecvo.shared.IntensityRegistration
 import io.ecvo.shared.LiveCamera
 import io.ecvo.shared.LiveMode
 import io.ecvo.shared.LiveModeDecision
+import io.ecvo.shared.LiveCameras
+import io.ecvo.shared.LiveFallbackMemory
 import io.ecvo.shared.LiveModePolicy
 import io.ecvo.shared.Pairing
 import io.ecvo.shared.PosePolicy
@@ -38,6 +42,7 @@ import io.ecvo.shared.SourceHandle
 import io.ecvo.shared.StreamSize
 import io.ecvo.shared.StreamSizes
 import io.ecvo.shared.TimestampSource
+import io.ecvo.shared.TrackingResolution
 
 /**
  * Live frames from a Camera2 depth camera (`ImageFormat.DEPTH16`) with intensity from a
@@ -49,8 +54,10 @@ import io.ecvo.shared.TimestampSource
  * sizes and the intrinsics, lens distortion, the depth-to-colour pose,
  * pairing by clock, and the confidence policy. Frames reach [callbacks] on [handler]'s
  * thread at the depth stream's native size (a 240x180 ToF stream stays 240x180 with its
- * own intrinsics) as millimetres and 8-bit gray; every failure (including a throwing
- * Camera2 call) reaches `callbacks.failed`, never the thread's uncaught handler.
+ * own intrinsics), or halved ([TrackingResolution]), as millimetres and 8-bit gray;
+ * every failure (including a throwing Camera2 call) reaches the fallback policy or
+ * `callbacks.failed`, never the thread's uncaught handler. Camera opens, callbacks and
+ * closes all run on [handler]'s thread, which alone touches the maps of open cameras.
  */
 class DepthCameraSource(
     private val manager: CameraManager,
@@ -60,6 +67,8 @@ class DepthCameraSource(
     private val callbacks: SourceCallbacks,
     /** Called with each frame handed to the tracker (for the preview). */
     private val onTracked: (ShortArray, ByteArray) -> Unit = { _, _ -> },
+    /** Called (camera thread) with [Setup.pairKey] when the pair fell back to depth alone, to be remembered. */
+    private val onFellBack: (String) -> Unit = {},
 ) : SourceHandle {
     /** The cameras and sizes chosen by [find], and how a frame is made from them. */
     class Setup(
@@ -74,6 +83,10 @@ class DepthCameraSource(
         /** The depth camera's `SENSOR_ORIENTATION` (degrees) and whether it faces the back, for gravity. */
         val sensorOrientation: Int,
         val backFacing: Boolean,
+        /** Whether the depth camera's `SENSOR_INFO_TIMESTAMP_SOURCE` is REALTIME (one clock across camera instances). */
+        val depthRealtime: Boolean,
+        /** The depth + colour pair's [LiveFallbackMemory] key, or null without a colour camera. */
+        val pairKey: String?,
         /** Sentences for the user about fallbacks taken (no calibration, no lens pose, clocks). */
         val notes: List<String>,
     ) {
@@ -97,24 +110,36 @@ class DepthCameraSource(
     private val frameDepth = ShortArray(setup.frame.pixels)
     /** The intensity of a depth-only frame: all zero, which the engine tracks on depth alone. */
     private val noIntensity = ByteArray(setup.frame.pixels)
+    /** The registered intensity, reused frame after frame (the tracker, recorder and preview copy it). */
+    private val registered = ByteArray(setup.frame.pixels)
     private val y = ByteArray(setup.colour?.let { it.size.width * it.size.height } ?: 0)
     private var confidenceNoted = false
-    private var colourFrames = 0
+    private val exposure = ExposureLock()
     private var colourRequest: CaptureRequest.Builder? = null
     @Volatile private var running = false
     @Volatile var mode: LiveMode = setup.mode.mode
         private set
 
-    /** Opens the cameras (depth first) and starts streaming. Call with the CAMERA permission granted. */
+    /**
+     * Opens the cameras (depth first) and starts streaming; returns at once. Call with the
+     * CAMERA permission granted. The opens run on the camera thread, like every callback
+     * and failure path, so the maps of open cameras are touched by that thread alone.
+     */
     fun start(): DepthCameraSource {
         running = true
         depthReader.setOnImageAvailableListener({ r -> guarded("depth frame") { onDepth(r) } }, handler)
         colourReader?.setOnImageAvailableListener({ r -> guarded("colour frame") { onColour(r) } }, handler)
         callbacks.mode(mode)
         setup.mode.note?.let { callbacks.notice(it) }
-        open(setup.depthId, LiveCamera.DEPTH, depthReader)
-        val c = setup.colour
-        if (mode == LiveMode.DEPTH_AND_COLOUR && c != null && colourReader != null) open(c.id, LiveCamera.COLOUR, colourReader)
+        handler.post {
+            if (running) {
+                guarded("opening the cameras") {
+                    open(setup.depthId, LiveCamera.DEPTH, depthReader)
+                    val c = setup.colour
+                    if (mode == LiveMode.DEPTH_AND_COLOUR && c != null && colourReader != null) open(c.id, LiveCamera.COLOUR, colourReader)
+                }
+            }
+        }
         return this
     }
 
@@ -142,21 +167,29 @@ class DepthCameraSource(
         } finally {
             img.close()
         }
-        colourFrames++
-        if (colourFrames == AE_LOCK_AFTER_FRAMES) lockExposure()
     }
 
     /**
-     * Locks the colour camera's auto-exposure once it had [AE_LOCK_AFTER_FRAMES] frames to
-     * converge: the tracker's photometric terms assume a point keeps its brightness, which
-     * free-running exposure breaks whenever the view changes.
+     * Watches the colour stream's capture results and locks auto-exposure and white
+     * balance once both converged ([ExposureLock]): the tracker's photometric terms
+     * assume a point keeps its brightness.
      */
-    private fun lockExposure() {
+    private inner class ExposureWatch : CameraCaptureSession.CaptureCallback() {
+        override fun onCaptureCompleted(session: CameraCaptureSession, request: CaptureRequest, result: TotalCaptureResult) = guarded("colour exposure") {
+            val action = exposure.onResult(result.get(CaptureResult.CONTROL_AE_STATE), result.get(CaptureResult.CONTROL_AWB_STATE))
+            if (action == ExposureLock.Action.WAIT) return@guarded
+            if (action == ExposureLock.Action.LOCK_UNCONVERGED) callbacks.notice(ExposureLock.UNCONVERGED_NOTE)
+            lockExposure(session)
+        }
+    }
+
+    private fun lockExposure(session: CameraCaptureSession) {
         val id = setup.colour?.id ?: return
-        val session = sessions[id] ?: return
+        if (sessions[id] !== session) return
         val request = colourRequest ?: return
         guarded("camera $id: locking exposure") {
             request.set(CaptureRequest.CONTROL_AE_LOCK, true)
+            request.set(CaptureRequest.CONTROL_AWB_LOCK, true)
             session.setRepeatingRequest(request.build(), null, handler)
         }
     }
@@ -179,11 +212,12 @@ class DepthCameraSource(
         val colour = setup.colour
         if (mode == LiveMode.DEPTH_AND_COLOUR && colour != null) {
             if (watch.onDepth()) {
+                setup.pairKey?.let(onFellBack)
                 switchToDepthOnly("no colour frames arrived")
             } else {
                 if (!pairer.onDepth(ts, SystemClock.elapsedRealtimeNanos())) return
                 setup.remap.apply(rawDepth, frameDepth)
-                val gray = colour.registration.register(frameDepth, GrayPlane(y, colour.size.width, colour.size.height))
+                val gray = colour.registration.register(frameDepth, GrayPlane(y, colour.size.width, colour.size.height), registered)
                 onTracked(frameDepth, gray)
                 callbacks.frame(ts, frameDepth, gray)
                 return
@@ -213,12 +247,14 @@ class DepthCameraSource(
         sessions.values.forEach { runCatching { it.close() } }
         sessions.clear()
         devices.values.toList().forEach { runCatching { it.close() } }
-        handler.postDelayed({ if (running) open(setup.depthId, LiveCamera.DEPTH, depthReader) }, REOPEN_DELAY_MS)
+        handler.postDelayed({ if (running) guarded("camera ${setup.depthId}: reopening") { open(setup.depthId, LiveCamera.DEPTH, depthReader) } }, REOPEN_DELAY_MS)
     }
 
     private fun onCameraFailed(id: String, camera: LiveCamera, failure: CameraFailure, message: String) {
         if (!running) return
-        when (LiveModePolicy.onFailure(mode, camera, failure)) {
+        val action = LiveModePolicy.onFailure(mode, camera, failure)
+        if (LiveModePolicy.remembers(mode, action)) setup.pairKey?.let(onFellBack)
+        when (action) {
             FailureAction.CONTINUE_DEPTH_ONLY -> switchToDepthOnly(message)
             FailureAction.RESTART_DEPTH_ONLY -> restartDepthOnly(message)
             FailureAction.FAIL -> callbacks.failed(message)
@@ -241,6 +277,8 @@ class DepthCameraSource(
                 override fun onOpened(device: CameraDevice) {
                     devices[id] = device
                     if (!running || (camera == LiveCamera.COLOUR && mode != LiveMode.DEPTH_AND_COLOUR)) { device.close(); return }
+                    // A new camera instance: its clock may restart lower (CameraTimeline).
+                    if (camera == LiveCamera.DEPTH) callbacks.cameraStarted(setup.depthRealtime)
                     guarded("camera $id") {
                         @Suppress("DEPRECATION")
                         device.createCaptureSession(listOf(reader.surface), object : CameraCaptureSession.StateCallback() {
@@ -249,45 +287,48 @@ class DepthCameraSource(
                                 sessions[id] = session
                                 // Throws CameraAccessException, IllegalStateException (closed) or IllegalArgumentException.
                                 guarded("camera $id: starting the stream") {
-                                    // Colour: TEMPLATE_RECORD (a steady frame rate), exposure locked after it converged.
+                                    // Colour: TEMPLATE_RECORD (a steady frame rate), exposure and white balance locked once converged (ExposureWatch).
                                     val template = if (camera == LiveCamera.COLOUR) CameraDevice.TEMPLATE_RECORD else CameraDevice.TEMPLATE_PREVIEW
                                     val request = device.createCaptureRequest(template)
                                     request.addTarget(reader.surface)
                                     if (camera == LiveCamera.COLOUR) colourRequest = request
-                                    session.setRepeatingRequest(request.build(), null, handler)
+                                    session.setRepeatingRequest(request.build(), if (camera == LiveCamera.COLOUR) ExposureWatch() else null, handler)
                                 }
                             }
 
                             override fun onConfigureFailed(session: CameraCaptureSession) =
-                                onCameraFailed(id, camera, CameraFailure.OTHER, "camera $id: stream configuration failed")
+                                onCameraFailed(id, camera, CameraFailure.CONFIGURE_FAILED, "camera $id: stream configuration failed")
                         }, handler)
                     }
                 }
 
-                override fun onClosed(device: CameraDevice) {
+                override fun onClosed(device: CameraDevice) = guarded("camera $id: closing") {
                     if (devices[id] === device) devices.remove(id)
                     closeReadersIfIdle()
                 }
 
-                override fun onDisconnected(device: CameraDevice) {
-                    device.close()
+                override fun onDisconnected(device: CameraDevice) = guarded("camera $id: disconnected") {
+                    runCatching { device.close() }
                     // Ignored by the controller if this source was already replaced.
                     onCameraFailed(id, camera, CameraFailure.DISCONNECTED, "camera $id was disconnected")
                 }
 
-                override fun onError(device: CameraDevice, error: Int) {
-                    device.close()
-                    val inUse = error == CameraDevice.StateCallback.ERROR_MAX_CAMERAS_IN_USE || error == CameraDevice.StateCallback.ERROR_CAMERA_IN_USE
+                override fun onError(device: CameraDevice, error: Int) = guarded("camera $id: error $error") {
+                    runCatching { device.close() }
+                    val failure = CameraFailure.fromErrorCode(error)
+                    val inUse = failure == CameraFailure.IN_USE || failure == CameraFailure.MAX_CAMERAS_IN_USE
                     onCameraFailed(
-                        id, camera, if (inUse) CameraFailure.IN_USE else CameraFailure.OTHER,
+                        id, camera, failure,
                         if (inUse) "camera $id is in use; this phone may not stream the depth and colour cameras at once" else "camera $id failed (error $error)",
                     )
                 }
             }, handler)
-        } catch (e: CameraAccessException) {
-            onCameraFailed(id, camera, CameraFailure.OTHER, "camera $id: ${e.message}")
         } catch (e: SecurityException) {
             callbacks.failed("camera $id: camera permission missing")
+        } catch (e: Exception) {
+            // CameraAccessException, IllegalArgumentException (an id gone), IllegalStateException:
+            // on the camera thread (open runs there only), never uncaught on it.
+            onCameraFailed(id, camera, CameraFailure.EXCEPTION, "camera $id: ${e.message ?: e.javaClass.simpleName}")
         }
     }
 
@@ -306,8 +347,8 @@ class DepthCameraSource(
     }
 
     companion object {
-        /** Colour frames the auto-exposure has to converge before it is locked (about 1 s). */
-        private const val AE_LOCK_AFTER_FRAMES = 30
+        /** Numeric camera ids tried beyond `getCameraIdList` ("0" to "15"). */
+        private const val HIDDEN_IDS_PROBED = 16
 
         /** Wait before reopening the depth camera alone, after closing both. */
         private const val REOPEN_DELAY_MS = 300L
@@ -316,9 +357,23 @@ class DepthCameraSource(
          * Whether some camera has the `DEPTH_OUTPUT` capability (readable without the
          * CAMERA permission; the calibration is read later, by [find]).
          */
-        fun hasDepthCamera(manager: CameraManager): Boolean = manager.cameraIdList.any { id ->
-            manager.getCameraCharacteristics(id).get(CameraCharacteristics.REQUEST_AVAILABLE_CAPABILITIES)
+        fun hasDepthCamera(manager: CameraManager): Boolean = cameraIds(manager).any { id ->
+            characteristics(manager, id)?.get(CameraCharacteristics.REQUEST_AVAILABLE_CAPABILITIES)
                 ?.contains(CameraMetadata.REQUEST_AVAILABLE_CAPABILITIES_DEPTH_OUTPUT) == true
+        }
+
+        /**
+         * The listed camera ids, then the small numeric ids the list leaves out: some phones
+         * keep their ToF camera out of `getCameraIdList` but describe and open it by id.
+         */
+        private fun cameraIds(manager: CameraManager): List<String> =
+            (manager.cameraIdList.toList() + (0 until HIDDEN_IDS_PROBED).map { it.toString() }).distinct()
+
+        /** The characteristics of camera [id], or null if the phone has no such camera. */
+        private fun characteristics(manager: CameraManager, id: String): CameraCharacteristics? = try {
+            manager.getCameraCharacteristics(id)
+        } catch (e: IllegalArgumentException) {
+            null
         }
 
         /**
@@ -328,10 +383,21 @@ class DepthCameraSource(
          * Call at the start of a session, after the CAMERA permission was granted: without
          * it, Camera2 hides `LENS_INTRINSIC_CALIBRATION` and `LENS_POSE_*`.
          */
-        fun find(manager: CameraManager): Setup? {
-            val ids = manager.cameraIdList
-            for (depthId in ids) {
-                val dc = manager.getCameraCharacteristics(depthId)
+        fun find(
+            manager: CameraManager,
+            liveCameras: LiveCameras = LiveCameras.AUTO,
+            depthOnlyPairs: Set<String> = emptySet(),
+            resolution: TrackingResolution = TrackingResolution.AUTO,
+        ): Setup? {
+            // Listed and unlisted ids that the phone describes.
+            val ids = cameraIds(manager).filter { characteristics(manager, it) != null }
+            // Listed cameras before unlisted ones; within each, back-facing first (the usual world-facing ToF).
+            val listed = manager.cameraIdList.toSet()
+            val ordered = ids.sortedWith(
+                compareBy<String>({ if (it in listed) 0 else 1 }, { if (characteristics(manager, it)?.get(CameraCharacteristics.LENS_FACING) == CameraMetadata.LENS_FACING_BACK) 0 else 1 }),
+            )
+            for (depthId in ordered) {
+                val dc = characteristics(manager, depthId) ?: continue
                 val caps = dc.get(CameraCharacteristics.REQUEST_AVAILABLE_CAPABILITIES) ?: continue
                 if (CameraMetadata.REQUEST_AVAILABLE_CAPABILITIES_DEPTH_OUTPUT !in caps) continue
                 val sizes = dc.get(CameraCharacteristics.SCALER_STREAM_CONFIGURATION_MAP)?.getOutputSizes(ImageFormat.DEPTH16)
@@ -339,8 +405,9 @@ class DepthCameraSource(
                 // Tracked at the stream's native size (240x180 stays 240x180): no crop, no upsampling.
                 val depthSize = StreamSizes.nativeDepth(sizes) ?: continue
                 val facing = dc.get(CameraCharacteristics.LENS_FACING)
-                // Colour cameras facing the same way; the largest sensor is the "primary" one.
-                val colours = ids.filter { id ->
+                // Listed colour cameras facing the same way (an unlisted one may be a physical
+                // camera only its logical camera opens); the largest sensor is the "primary" one.
+                val colours = manager.cameraIdList.filter { id ->
                     id != depthId && manager.getCameraCharacteristics(id).let { c ->
                         c.get(CameraCharacteristics.LENS_FACING) == facing &&
                             c.get(CameraCharacteristics.REQUEST_AVAILABLE_CAPABILITIES)
@@ -351,32 +418,38 @@ class DepthCameraSource(
                 val depthCal = calibration(dc)
                 if (!depthCal.calibrated) notes += "The depth camera publishes no intrinsic calibration; its focal length is estimated from the lens and sensor size."
                 val depthCam = depthCal.sensorIntrinsics().forOutput(depthSize.width, depthSize.height)
-                val remap = DepthRemap.create(depthCam, depthSize.width, depthSize.height, depthCal.effectiveDistortion)
+                // The tracker's frame: the stream's size, or halved (TrackingResolution), undistorted if needed.
+                val frameSize = resolution.frameSize(depthSize)
+                val remap = DepthRemap.create(depthCam, frameSize.width, frameSize.height, depthCal.effectiveDistortion)
                 val colour = colourFor(manager, dc, colours, depthSize, remap, notes)
                 // Which cameras the phone guarantees to stream at once (API 30+); before, unknown.
                 val concurrent: List<Set<String>>? = if (Build.VERSION.SDK_INT >= 30) manager.concurrentCameraIds.map { it.toSet() } else null
+                val pairKey = colour?.let { LiveFallbackMemory.key(depthId, it.id) }
                 return Setup(
-                    depthId, depthSize, colour, remap, LiveModePolicy.start(depthId, colour?.id, concurrent),
+                    depthId, depthSize, colour, remap,
+                    LiveModePolicy.start(depthId, colour?.id, concurrent, liveCameras, pairKey != null && pairKey in depthOnlyPairs),
                     dc.get(CameraCharacteristics.SENSOR_ORIENTATION) ?: 0,
-                    facing != CameraMetadata.LENS_FACING_FRONT, notes,
+                    facing != CameraMetadata.LENS_FACING_FRONT,
+                    clock(dc) == TimestampSource.REALTIME, pairKey, notes,
                 )
             }
             return null
         }
 
-        /** The first colour camera of [colours] with a YUV stream, with its registration to the depth frame; null if none. */
+        /** The primary (largest-sensor) colour camera of [colours], with its registration to the depth frame; null if none or it has no YUV stream. */
         private fun colourFor(
             manager: CameraManager, dc: CameraCharacteristics, colours: List<String>, depthSize: StreamSize, remap: DepthRemap, notes: MutableList<String>,
         ): Colour? {
-            val colourId = colours.firstOrNull() ?: return null
-            // The largest sensor is the "primary" one.
+            if (colours.isEmpty()) return null
+            // The largest sensor is the "primary" one; it is the one used (not merely the first listed).
             val primary = colours.maxBy { id ->
                 manager.getCameraCharacteristics(id).get(CameraCharacteristics.SENSOR_INFO_ACTIVE_ARRAY_SIZE)?.let { it.width().toLong() * it.height() } ?: 0L
             }
+            val colourId = primary
             val cc = manager.getCameraCharacteristics(colourId)
             val yuv = cc.get(CameraCharacteristics.SCALER_STREAM_CONFIGURATION_MAP)?.getOutputSizes(ImageFormat.YUV_420_888)
                 ?.map { StreamSize(it.width, it.height) } ?: return null
-            val colourSize = StreamSizes.colour(yuv, depthSize, depthSize.width) ?: return null
+            val colourSize = StreamSizes.colour(yuv, depthSize, remap.camera.width) ?: return null
             val colourCam = calibration(cc).sensorIntrinsics().forOutput(colourSize.width, colourSize.height)
             val decision = PosePolicy.decide(
                 pose(dc), pose(cc), colourIsPrimary = colourId == primary,

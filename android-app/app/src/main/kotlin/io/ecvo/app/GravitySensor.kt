@@ -8,12 +8,15 @@ import android.hardware.SensorManager
 import io.ecvo.shared.GravityAlignment
 
 /**
- * Gravity at the start of a live session, for the gravity-aligned top view: the first few
- * readings of `TYPE_GRAVITY` (or, without it, `TYPE_ACCELEROMETER`) averaged, turned into
- * the depth camera's frame (the tracker's world is the first camera's) with its
- * `SENSOR_ORIENTATION`, then the listener is removed. [up] stays null for a replay (no
- * gravity was recorded) or a phone without either sensor: the top view is then the first
- * camera's x-z plane.
+ * Gravity at the first tracked frame of a live session, for the gravity-aligned top view
+ * (the tracker's world is that frame's camera): [measure] starts listening to
+ * `TYPE_GRAVITY` (or, without it, `TYPE_ACCELEROMETER`) at the Live press and keeps the
+ * latest [READINGS] readings; [freeze], called when the first frame reaches the tracker,
+ * averages them (or the next ones, if none came yet), turns the result into the depth
+ * camera's frame with its `SENSOR_ORIENTATION`, and removes the listener. [up] stays null
+ * for a replay (no gravity was recorded) or a phone without either sensor: the top view
+ * is then the first camera's x-z plane, unless the recording stored gravity ([use]).
+ * UI thread only.
  */
 object GravitySensor {
     /** World up in the tracker's world (the first camera's frame), or null. */
@@ -28,7 +31,13 @@ object GravitySensor {
         up = null
     }
 
-    /** Starts measuring for a session whose depth camera has [orientationDeg] and faces the back or not. */
+    /** Uses [recorded] (a replayed recording's `gravity_up`) as the direction, with no measurement. */
+    fun use(context: Context, recorded: DoubleArray) {
+        stop(context)
+        up = recorded.copyOf()
+    }
+
+    /** Starts listening for a session whose depth camera has [orientationDeg] and faces the back or not. */
     fun measure(context: Context, orientationDeg: Int, backFacing: Boolean) {
         clear(context)
         val sm = context.applicationContext.getSystemService(Context.SENSOR_SERVICE) as? SensorManager ?: return
@@ -38,27 +47,44 @@ object GravitySensor {
         sm.registerListener(l, sensor, SensorManager.SENSOR_DELAY_GAME)
     }
 
+    /** The first frame was tracked: gravity is the average of the latest readings (or of the next ones). */
+    fun freeze() {
+        listener?.freeze()
+    }
+
     private fun stop(context: Context) {
         val l = listener ?: return
         listener = null
         (context.applicationContext.getSystemService(Context.SENSOR_SERVICE) as? SensorManager)?.unregisterListener(l)
     }
 
-    /** Averages [READINGS] readings (a named class, not a lambda: the APK's dexer cannot desugar lambdas). */
+    /** Keeps the latest [READINGS] readings (a named class, not a lambda: the APK's dexer cannot desugar lambdas). */
     private class Listener(private val sm: SensorManager, private val orientationDeg: Int, private val backFacing: Boolean) : SensorEventListener {
-        private val sum = DoubleArray(3)
+        private val ring = DoubleArray(3 * READINGS)
         private var n = 0
+        private var frozen = false
 
         override fun onSensorChanged(event: SensorEvent) {
             val v = event.values
-            if (v.size < 3 || n >= READINGS) return
-            sum[0] += v[0].toDouble(); sum[1] += v[1].toDouble(); sum[2] += v[2].toDouble()
+            if (v.size < 3) return
+            val k = 3 * (n % READINGS)
+            ring[k] = v[0].toDouble(); ring[k + 1] = v[1].toDouble(); ring[k + 2] = v[2].toDouble()
             n++
-            if (n == READINGS) {
-                up = GravityAlignment.upInCamera(sum[0] / n, sum[1] / n, sum[2] / n, orientationDeg, backFacing)
-                sm.unregisterListener(this)
-                if (listener === this) listener = null
-            }
+            if (frozen && n >= READINGS) finish()
+        }
+
+        fun freeze() {
+            frozen = true
+            if (n > 0) finish()
+        }
+
+        private fun finish() {
+            val m = minOf(n, READINGS)
+            var x = 0.0; var y = 0.0; var z = 0.0
+            for (i in 0 until m) { x += ring[3 * i]; y += ring[3 * i + 1]; z += ring[3 * i + 2] }
+            up = GravityAlignment.upInCamera(x / m, y / m, z / m, orientationDeg, backFacing)
+            sm.unregisterListener(this)
+            if (listener === this) listener = null
         }
 
         override fun onAccuracyChanged(sensor: Sensor, accuracy: Int) = Unit

@@ -12,6 +12,8 @@ import android.os.Build
 import android.os.Bundle
 import android.os.Handler
 import android.os.Looper
+import android.net.Uri
+import android.provider.Settings
 import android.util.Log
 import android.view.View
 import android.view.WindowInsets
@@ -26,23 +28,19 @@ import android.window.OnBackInvokedCallback
 import android.window.OnBackInvokedDispatcher
 import io.ecvo.ReferenceFrame
 import io.ecvo.Tracker
-import io.ecvo.TrackerConfig
 import io.ecvo.shared.AppSettings
 import io.ecvo.shared.CameraIntrinsics
-import io.ecvo.shared.ConfidencePolicy
+import io.ecvo.shared.ScreenOnSwitch
 import io.ecvo.shared.DirectoryFiles
-import io.ecvo.shared.ExportFiles
 import io.ecvo.shared.ExportPlan
 import io.ecvo.shared.ExportSelection
 import io.ecvo.shared.FrameSource
 import io.ecvo.shared.PreviewKind
 import io.ecvo.shared.ProjectionPlane
-import io.ecvo.shared.RecordingEntry
-import io.ecvo.shared.Recordings
 import io.ecvo.shared.SessionController
-import io.ecvo.shared.SessionExport
 import io.ecvo.shared.StatusKind
 import io.ecvo.shared.StreamFiles
+import io.ecvo.shared.StreamMetadata
 import io.ecvo.shared.StreamReader
 import io.ecvo.shared.StreamRecorder
 import java.io.File
@@ -65,8 +63,19 @@ class MainActivity : Activity() {
     private val pose = FloatArray(16)
     private var polls = 0L
     private var references: List<ReferenceFrame> = emptyList()
-    private var settings = AppSettings()
+    private val settings: AppSettings get() = SessionHolder.settings(this)
     private var hasDepthCamera = false
+    private val screenOn = ScreenOnSwitch()
+    private var previewBitmap: Bitmap? = null
+    private val settingsDialog by lazy { SettingsDialog(this) { kind, d -> keep(kind, d) } }
+    private val recordingsDialog by lazy {
+        RecordingsDialog(
+            this, recordingsDir, { kind, d -> keep(kind, d) },
+            replay = { r -> startReplay(DirectoryFiles(r.dir), r.dir) },
+            export = { r, target -> exportPlan(ExportSelection.forRecording(r.dir, controller.session != null, SessionHolder.streams.stream), r.name, target) },
+        )
+    }
+    private val exporter by lazy { Exporter(this) { msg -> controller.presenter.onNotice(msg); render() } }
 
     private lateinit var stateText: TextView
     private lateinit var numbersText: TextView
@@ -75,6 +84,7 @@ class MainActivity : Activity() {
     private lateinit var preview: ImageView
     private lateinit var liveButton: Button
     private lateinit var recordButton: ToggleButton
+    private lateinit var pauseButton: Button
 
     private val poll = object : Runnable {
         override fun run() {
@@ -114,16 +124,21 @@ class MainActivity : Activity() {
         preview = findViewById(R.id.preview)
         liveButton = findViewById(R.id.live)
         recordButton = findViewById(R.id.record)
-        settings = loadSettings()
+        pauseButton = findViewById(R.id.pause)
         SessionHolder.preview = settings.preview
 
         findViewById<Button>(R.id.replay_sample).setOnClickListener { startReplay(AssetStreamFiles(assets)) }
-        findViewById<Button>(R.id.recordings).setOnClickListener { showRecordings() }
+        findViewById<Button>(R.id.recordings).setOnClickListener { recordingsDialog.show() }
         liveButton.setOnClickListener { onLiveClicked() }
         findViewById<Button>(R.id.stop).setOnClickListener { SessionHolder.resumeLive = false; controller.stopSource(); render() }
+        pauseButton.setOnClickListener {
+            SessionHolder.resumeReplay = false
+            if (controller.paused) controller.resumePaused() else controller.pause()
+            render()
+        }
         findViewById<Button>(R.id.reset).setOnClickListener { SessionHolder.resumeLive = false; controller.reset(); trajectoryView.clear(); render() }
-        findViewById<Button>(R.id.export).setOnClickListener { export() }
-        findViewById<Button>(R.id.settings).setOnClickListener { showSettings() }
+        findViewById<Button>(R.id.export).setOnClickListener { chooseExport() }
+        findViewById<Button>(R.id.settings).setOnClickListener { settingsDialog.show() }
         recordButton.setOnClickListener { setRecording(recordButton.isChecked) }
         findViewById<RadioGroup>(R.id.plane).setOnCheckedChangeListener { _, id ->
             trajectoryView.plane = when (id) {
@@ -149,9 +164,15 @@ class MainActivity : Activity() {
 
     override fun onResume() {
         super.onResume()
+        // Granted in the system settings while away: the "denied" message goes.
+        if (hasDepthCamera && hasCameraPermission()) controller.presenter.onCameraPermission(true)
         if (SessionHolder.resumeLive) {
             SessionHolder.resumeLive = false
             if (hasCameraPermission()) resumeLive()
+        }
+        if (SessionHolder.resumeReplay) {
+            SessionHolder.resumeReplay = false
+            controller.resumePaused()
         }
         ui.post(poll)
     }
@@ -163,6 +184,10 @@ class MainActivity : Activity() {
         if (!isChangingConfigurations && controller.running == FrameSource.LIVE) {
             SessionHolder.resumeLive = true
             controller.stopSource()
+        }
+        // A replay holds still while the app is away, and goes on on return (if the user had not paused it).
+        if (!isChangingConfigurations && controller.running == FrameSource.REPLAY && !controller.paused) {
+            SessionHolder.resumeReplay = controller.pause()
         }
         super.onPause()
     }
@@ -217,25 +242,10 @@ class MainActivity : Activity() {
     /** Reopens the dialog a rotation closed ([kind] as [keep] named it). */
     private fun reopenDialog(kind: String) {
         when {
-            kind == "settings" -> showSettings()
-            kind == "recordings" -> showRecordings()
+            kind == "settings" -> settingsDialog.show()
+            kind == "recordings" -> recordingsDialog.show()
             kind == "permission" -> onLiveClicked()
-            kind.startsWith("recording:") || kind.startsWith("delete:") -> {
-                val name = kind.substringAfter(':')
-                val root = recordingsDir
-                Thread(Runnable {
-                    val r = try {
-                        Recordings.list(root).firstOrNull { it.name == name }
-                    } catch (e: Exception) {
-                        null
-                    }
-                    ui.post {
-                        if (r != null && !isFinishing && !isDestroyed) {
-                            if (kind.startsWith("delete:")) confirmDelete(r) else showRecordingActions(r)
-                        }
-                    }
-                }, "ecvo-recordings").start()
-            }
+            kind.startsWith("recording:") || kind.startsWith("delete:") -> recordingsDialog.reopen(kind)
         }
     }
 
@@ -261,40 +271,75 @@ class MainActivity : Activity() {
         if (requestCode != REQUEST_CAMERA) return
         val granted = grantResults.isNotEmpty() && grantResults[0] == PackageManager.PERMISSION_GRANTED
         controller.presenter.onCameraPermission(granted)
-        if (granted) startLive()
+        if (granted) {
+            startLive()
+        } else if (grantResults.isNotEmpty() && !shouldShowRequestPermissionRationale(Manifest.permission.CAMERA)) {
+            // "Don't ask again" (or denied twice): only the app's settings can grant it now.
+            AlertDialog.Builder(this)
+                .setTitle(R.string.permission_settings_title)
+                .setMessage(R.string.permission_settings_message)
+                .setPositiveButton(R.string.permission_open_settings) { _, _ -> openAppSettings() }
+                .setNegativeButton(R.string.close, null)
+                .show()
+        }
         render()
     }
 
-    /** The tracker's settings for frames of [camera] from a [kind] source. */
-    private fun trackerConfig(camera: CameraIntrinsics, kind: FrameSource) = TrackerConfig(
-        width = camera.width, height = camera.height,
-        fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy,
-        depthFormat = if (camera.depthScale == 1000.0) io.ecvo.DepthFormat.MILLIMETRES else io.ecvo.DepthFormat.CUSTOM_SCALE,
-        depthScale = camera.depthScale,
-        preset = settings.preset, mode = settings.mode,
-        admission = SessionController.admissionFor(kind),
-        pointCloud = settings.pointCloud,
-    )
+    /** The file picker's answer (Recordings… → Import…). */
+    override fun onActivityResult(requestCode: Int, resultCode: Int, data: Intent?) {
+        super.onActivityResult(requestCode, resultCode, data)
+        val uri = data?.data
+        if (requestCode == RecordingsDialog.REQUEST_IMPORT && resultCode == RESULT_OK && uri != null) recordingsDialog.onImportPicked(uri)
+    }
 
-    /** Replays [files]; [recording] is the recordings folder it comes from (null: the bundled sample). */
-    private fun startReplay(files: StreamFiles, recording: File? = null) {
-        val reader = try {
-            StreamReader(files)
-        } catch (e: Exception) {
-            controller.stopSource()
-            controller.presenter.onError("Cannot replay ${files.description}: ${e.message ?: e.javaClass.simpleName}")
+    private fun openAppSettings() {
+        try {
+            startActivity(Intent(Settings.ACTION_APPLICATION_DETAILS_SETTINGS, Uri.fromParts("package", packageName, null)))
+        } catch (e: ActivityNotFoundException) {
+            controller.presenter.onNotice("Open Settings → Apps → ecvo → Permissions to allow camera access.")
             render()
-            return
         }
+    }
+
+    /**
+     * Replays [files]; [recording] is the recordings folder it comes from (null: the
+     * bundled sample). The stream's lists are parsed on a worker thread (136 ms for a
+     * 10-minute list on a desktop JVM), then the replay starts on the UI thread.
+     */
+    private fun startReplay(files: StreamFiles, recording: File? = null) {
+        Thread(Runnable {
+            val meta = StreamMetadata.read(files)
+            val reader = try {
+                StreamReader(files)
+            } catch (e: Exception) {
+                ui.post {
+                    controller.stopSource()
+                    controller.presenter.onError("Cannot replay ${files.description}: ${e.message ?: e.javaClass.simpleName}")
+                    render()
+                }
+                return@Runnable
+            }
+            ui.post { if (!isDestroyed) startReplay(reader, recording, meta?.gravityUp) }
+        }, "ecvo-replay-open").start()
+    }
+
+    private fun startReplay(reader: StreamReader, recording: File?, gravityUp: DoubleArray?) {
         SessionHolder.camera = null
-        GravitySensor.clear(this) // no gravity in a recording: the first camera's x-z top view
+        // The recording's gravity if it stored one; else the first camera's x-z top view.
+        if (gravityUp != null) GravitySensor.use(this, gravityUp) else GravitySensor.clear(this)
         SessionHolder.resumeLive = false
+        SessionHolder.resumeReplay = false
         trajectoryView.clear()
         SessionHolder.previewSize = reader.camera.width to reader.camera.height
-        val started = controller.start(FrameSource.REPLAY, trackerConfig(reader.camera, FrameSource.REPLAY)) { cb ->
-            ReplaySource(reader, cb) { d, g -> if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g) }.start()
+        val s = settings
+        val started = controller.start(FrameSource.REPLAY, s.trackerConfig(reader.camera, FrameSource.REPLAY)) { cb ->
+            ReplaySource(reader, cb, s.replaySpeed) { d, g -> if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g) }
+                .also { SessionHolder.replay = it }.start()
         }
-        if (started) SessionHolder.streams.onStarted(recording)
+        // Set whether or not the start succeeded: a failed start must not export the previous session's stream.
+        SessionHolder.streams.onStarted(if (started) recording else null)
+        SessionHolder.sessionPointCloud = s.pointCloud
+        SessionHolder.sessionCamera = reader.camera
         render()
     }
 
@@ -305,8 +350,9 @@ class MainActivity : Activity() {
 
     private fun startLive() {
         // Read now, with the permission granted: earlier, the calibration is hidden.
+        val s = settings
         val setup = try {
-            DepthCameraSource.find(cameraManager)
+            DepthCameraSource.find(cameraManager, s.liveCameras, s.depthOnlyPairs, s.trackingResolution)
         } catch (e: Exception) {
             controller.presenter.onError("Reading the depth camera failed: ${e.message ?: e.javaClass.simpleName}")
             render()
@@ -321,8 +367,12 @@ class MainActivity : Activity() {
         liveSetup = setup
         GravitySensor.measure(this, setup.sensorOrientation, setup.backFacing)
         trajectoryView.clear()
-        if (controller.start(FrameSource.LIVE, trackerConfig(setup.frame, FrameSource.LIVE)) { cb -> openCamera(setup, cb) }) {
-            SessionHolder.streams.onStarted(null)
+        SessionHolder.gravityPending = true
+        val started = controller.start(FrameSource.LIVE, s.trackerConfig(setup.frame, FrameSource.LIVE)) { cb -> openCamera(setup, cb) }
+        SessionHolder.streams.onStarted(null) // also after a failed start: no earlier session's stream
+        SessionHolder.sessionPointCloud = s.pointCloud
+        SessionHolder.sessionCamera = setup.frame
+        if (started) {
             setup.notes.forEach { controller.presenter.onNotice(it) }
         }
         render()
@@ -336,9 +386,21 @@ class MainActivity : Activity() {
 
     private fun openCamera(setup: DepthCameraSource.Setup, cb: io.ecvo.shared.SourceCallbacks): DepthCameraSource {
         SessionHolder.previewSize = setup.frame.width to setup.frame.height
-        val source = DepthCameraSource(cameraManager, setup, SessionHolder.frames, settings.confidence, cb) { d, g ->
-            if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g)
-        }
+        val app = applicationContext
+        val source = DepthCameraSource(
+            cameraManager, setup, SessionHolder.frames, settings.confidence, cb,
+            onTracked = { d, g ->
+                // The tracker's world is the first tracked frame's camera: gravity is taken then.
+                if (SessionHolder.gravityPending) {
+                    SessionHolder.gravityPending = false
+                    ui.post { GravitySensor.freeze() }
+                }
+                if (SessionHolder.preview != PreviewKind.NONE) SessionHolder.latest.put(d, g)
+            },
+            // Remembered for this phone: the next Live starts with depth alone.
+            onFellBack = { key -> SessionHolder.rememberDepthOnly(app, key) },
+        )
+        SessionHolder.replay = null
         SessionHolder.camera = source
         return source.start()
     }
@@ -347,172 +409,44 @@ class MainActivity : Activity() {
         if (on) {
             val name = SimpleDateFormat("yyyyMMdd-HHmmss", Locale.ROOT).format(Date())
             val dir = File(recordingsDir, name)
-            if (controller.startRecording { cam -> StreamRecorder(dir, cam) }) SessionHolder.streams.onRecording(dir)
+            val meta = { cam: CameraIntrinsics ->
+                DeviceInfo.metadata(this, settings, controller.presenter.status.mode.ifEmpty { null }, cam)
+            }
+            if (controller.startRecording { cam -> StreamRecorder(dir, cam).also { meta(cam).write(dir) } }) SessionHolder.streams.onRecording(dir)
         } else {
-            val r = controller.stopRecording()
-            if (r != null) {
-                val dropped = controller.recordingDropped
-                val text = getString(R.string.recorded_to, r.framesWritten, r.dir.path) +
-                    (if (dropped > 0) getString(R.string.recorded_dropped, dropped) else "")
-                Toast.makeText(this, text, Toast.LENGTH_LONG).show()
+            // Returns at once; the queue drains on the recorder's thread, then the toast.
+            val app = applicationContext
+            if (controller.stopRecording { r ->
+                    val text = app.getString(R.string.recorded_to, r.recorder.framesWritten, r.recorder.dir.path) +
+                        (if (r.dropped > 0) app.getString(R.string.recorded_dropped, r.dropped) else "")
+                    Toast.makeText(app, text, Toast.LENGTH_LONG).show()
+                }
+            ) {
+                Toast.makeText(this, R.string.recording_finishing, Toast.LENGTH_SHORT).show()
             }
         }
         render()
     }
 
-    /** Lists the recordings on a worker thread (it reads every folder), then shows them. */
-    private fun showRecordings() {
-        val root = recordingsDir
-        Thread(Runnable {
-            val list = try {
-                Recordings.list(root)
-            } catch (e: Exception) {
-                emptyList()
-            }
-            ui.post { if (!isFinishing && !isDestroyed) showRecordingList(list) }
-        }, "ecvo-recordings").start()
-    }
-
-    private fun showRecordingList(list: List<RecordingEntry>) {
-        if (list.isEmpty()) {
-            Toast.makeText(this, R.string.no_recordings, Toast.LENGTH_LONG).show()
-            return
-        }
-        val labels = list.map { String.format(Locale.ROOT, "%s · %d frames · %.1f MB", it.name, it.frames, it.bytes / 1e6) }.toTypedArray<CharSequence>()
-        keep("recordings", AlertDialog.Builder(this)
-            .setTitle(R.string.recordings_title)
-            .setItems(labels) { _, which -> showRecordingActions(list[which]) }
-            .setNegativeButton(R.string.close, null)
-            .show())
-    }
-
-    /** Replay, export or delete one recording. */
-    private fun showRecordingActions(r: RecordingEntry) {
-        val actions = arrayOf<CharSequence>(getString(R.string.recording_replay), getString(R.string.recording_export), getString(R.string.recording_delete))
-        keep("recording:" + r.name, AlertDialog.Builder(this)
-            .setTitle(r.name)
-            .setItems(actions) { _, which ->
-                when (which) {
-                    0 -> startReplay(DirectoryFiles(r.dir), r.dir)
-                    1 -> export(ExportSelection.forRecording(r.dir, controller.session != null, SessionHolder.streams.stream), r.name)
-                    else -> confirmDelete(r)
-                }
-            }
-            .setNegativeButton(R.string.close, null)
-            .show())
-    }
-
-    private fun confirmDelete(r: RecordingEntry) {
-        keep("delete:" + r.name, AlertDialog.Builder(this)
-            .setTitle(R.string.recording_delete)
-            .setMessage(getString(R.string.recording_delete_confirm, r.name, r.frames))
-            .setPositiveButton(R.string.recording_delete) { _, _ ->
-                // Not the folder being recorded into, nor the one a running replay reads.
-                val inUse = if (controller.presenter.status.recording || controller.running == FrameSource.REPLAY) SessionHolder.streams.stream else null
-                val root = recordingsDir
-                Thread(Runnable {
-                    val ok = Recordings.delete(root, r.dir, inUse)
-                    ui.post {
-                        if (ok) SessionHolder.streams.onDeleted(r.dir)
-                        Toast.makeText(this, if (ok) getString(R.string.recording_deleted, r.name) else getString(R.string.recording_not_deleted, r.name), Toast.LENGTH_LONG).show()
-                    }
-                }, "ecvo-delete").start()
-            }
-            .setNegativeButton(R.string.close, null)
-            .show())
-    }
-
-    /** The Share button: the session with the stream it replays or recorded. */
-    private fun export() {
+    /** The Share button: the session with the stream it replays or recorded, shared or saved to Downloads. */
+    private fun chooseExport() {
         val plan = ExportSelection.forSession(controller.session != null, SessionHolder.streams.stream)
         if (plan == null) {
             Toast.makeText(this, R.string.nothing_to_export, Toast.LENGTH_LONG).show()
             return
         }
-        export(plan, null)
-    }
-
-    /** Writes [plan] into a new zip on a worker thread (never deleting an earlier one), then shares it. */
-    private fun export(plan: ExportPlan, recordingName: String?) {
-        Toast.makeText(this, R.string.exporting, Toast.LENGTH_SHORT).show()
-        val stamp = SimpleDateFormat("yyyyMMdd-HHmmss", Locale.ROOT).format(Date())
-        val base = if (recordingName != null) "ecvo-recording-$recordingName" else "ecvo-$stamp"
-        val exports = ExportProvider.exportsDir(cacheDir)
-        val session = if (plan.withSession) controller.session else null
-        val withCloud = settings.pointCloud
-        Thread(Runnable {
-            try {
-                val zip = ExportFiles.pack(plan, exports, base) { dir ->
-                    val t = session?.tracker
-                    if (t != null) {
-                        // The tracker keeps the latest Tracker.TRAJECTORY_WINDOW poses: export those.
-                        val poses = t.trajectorySince(t.stats().trajectoryStart.toInt())
-                        SessionExport.write(dir, poses, t.references(), if (withCloud) t.pointCloud(MAX_EXPORT_POINTS) else null)
-                    }
-                }
-                ui.post { share(zip) }
-            } catch (e: Exception) {
-                ui.post { controller.presenter.onNotice("Export failed: ${e.message ?: e.javaClass.simpleName}"); render() }
-            }
-        }, "ecvo-export").start()
-    }
-
-    private fun share(zip: File) {
-        val send = Intent(Intent.ACTION_SEND)
-            .setType("application/zip")
-            .putExtra(Intent.EXTRA_STREAM, ExportProvider.uriFor(zip))
-            .addFlags(Intent.FLAG_GRANT_READ_URI_PERMISSION)
-        try {
-            startActivity(Intent.createChooser(send, getString(R.string.share_title)))
-        } catch (e: ActivityNotFoundException) {
-            controller.presenter.onNotice("No app can receive the export; it is at ${zip.path}")
-            render()
-        }
-    }
-
-    private fun loadSettings(): AppSettings {
-        val prefs = getSharedPreferences(PREFS, MODE_PRIVATE)
-        return AppSettings.fromMap(prefs.all.mapValues { it.value?.toString() })
-    }
-
-    private fun saveSettings(s: AppSettings) {
-        settings = s
-        SessionHolder.preview = s.preview
-        val e = getSharedPreferences(PREFS, MODE_PRIVATE).edit()
-        for ((k, v) in s.toMap()) e.putString(k, v)
-        e.apply()
-    }
-
-    /** One row per setting; tapping a row moves it to its next value. */
-    private fun showSettings() {
-        val s = settings
-        val rows = arrayOf<CharSequence>(
-            "${getString(R.string.settings_preset)}: ${s.preset}",
-            "${getString(R.string.settings_mode)}: ${s.mode}",
-            "${getString(R.string.settings_confidence)}: ${s.confidence.label}",
-            "${getString(R.string.settings_preview)}: ${s.preview.name.lowercase()}",
-            "${getString(R.string.settings_cloud)}: ${if (s.pointCloud) "on" else "off"}",
-        )
-        keep("settings", AlertDialog.Builder(this)
-            .setTitle(R.string.settings)
-            .setItems(rows) { _, which ->
-                saveSettings(
-                    when (which) {
-                        0 -> s.copy(preset = next(s.preset, io.ecvo.Preset.entries))
-                        1 -> s.copy(mode = next(s.mode, io.ecvo.Mode.entries))
-                        2 -> s.copy(confidence = next(s.confidence, ConfidencePolicy.entries))
-                        3 -> s.copy(preview = next(s.preview, PreviewKind.entries))
-                        else -> s.copy(pointCloud = !s.pointCloud)
-                    },
-                )
-                if (which != 3) Toast.makeText(this, R.string.settings_applies, Toast.LENGTH_SHORT).show()
-                showSettings()
+        AlertDialog.Builder(this)
+            .setItems(arrayOf<CharSequence>(getString(R.string.export_share), getString(R.string.export_downloads))) { _, which ->
+                exportPlan(plan, null, if (which == 0) Exporter.Target.SHARE else Exporter.Target.DOWNLOADS)
             }
             .setNegativeButton(R.string.close, null)
-            .show())
+            .show()
     }
 
-    private fun <T> next(v: T, all: List<T>): T = all[(all.indexOf(v) + 1) % all.size]
+    private fun exportPlan(plan: ExportPlan, recordingName: String?, target: Exporter.Target) {
+        val meta = DeviceInfo.metadata(this, settings, controller.presenter.status.mode.ifEmpty { null }, SessionHolder.sessionCamera)
+        exporter.export(plan, recordingName, if (plan.withSession) controller.session else null, SessionHolder.sessionPointCloud, meta, target)
+    }
 
     /** Polls the session and redraws. */
     private fun refresh() {
@@ -536,7 +470,15 @@ class MainActivity : Activity() {
         val (w, h) = SessionHolder.previewSize ?: return
         val px = SessionHolder.latest.takePreview(kind) ?: return
         if (px.size != w * h) return
-        preview.setImageBitmap(Bitmap.createBitmap(px, w, h, Bitmap.Config.ARGB_8888))
+        // One bitmap per size, refilled: not a new one every 200 ms.
+        val b = previewBitmap?.takeIf { it.width == w && it.height == h }
+        if (b != null) {
+            b.setPixels(px, 0, w, 0, 0, w, h)
+            preview.invalidate()
+        } else {
+            previewBitmap = Bitmap.createBitmap(px, w, h, Bitmap.Config.ARGB_8888).copy(Bitmap.Config.ARGB_8888, true)
+            preview.setImageBitmap(previewBitmap)
+        }
     }
 
     private fun render() {
@@ -555,11 +497,13 @@ class MainActivity : Activity() {
         messageText.visibility = if (st.message == null) View.GONE else View.VISIBLE
         liveButton.isEnabled = hasDepthCamera
         if (recordButton.isChecked != st.recording) recordButton.isChecked = st.recording
-        // Keep the screen on during a hands-off live session only.
-        if (controller.running == FrameSource.LIVE) {
-            window.addFlags(WindowManager.LayoutParams.FLAG_KEEP_SCREEN_ON)
-        } else {
-            window.clearFlags(WindowManager.LayoutParams.FLAG_KEEP_SCREEN_ON)
+        pauseButton.isEnabled = controller.running == FrameSource.REPLAY
+        pauseButton.setText(if (controller.paused) R.string.resume else R.string.pause)
+        // Keep the screen on during a hands-off live session only; the window is touched on changes only.
+        when (screenOn.update(controller.running == FrameSource.LIVE)) {
+            true -> window.addFlags(WindowManager.LayoutParams.FLAG_KEEP_SCREEN_ON)
+            false -> window.clearFlags(WindowManager.LayoutParams.FLAG_KEEP_SCREEN_ON)
+            null -> Unit
         }
     }
 
@@ -569,8 +513,6 @@ class MainActivity : Activity() {
         private const val REFERENCES_EVERY = 10L
         private const val PREVIEW_EVERY = 4L
         private const val REQUEST_CAMERA = 1
-        private const val PREFS = "ecvo-settings"
         private const val STATE_DIALOG = "dialog"
-        private const val MAX_EXPORT_POINTS = 500_000
     }
 }

@@ -27,7 +27,8 @@ interface FrameRecorder : Closeable {
  * A write that fails (disk full) ends recording: the writer closes [recorder] (what it
  * wrote stays a readable stream), drops what is queued, and calls [onFailed] with a
  * sentence for the user, on the writer thread. [finish] writes what is queued, stops the
- * thread and closes [recorder].
+ * thread and closes [recorder]; [finishInBackground] does so without making the caller
+ * wait.
  */
 class AsyncRecorder<R : FrameRecorder>(
     val recorder: R,
@@ -85,6 +86,32 @@ class AsyncRecorder<R : FrameRecorder>(
         if (interrupted) Thread.currentThread().interrupt()
         recorder.close()
         return recorder
+    }
+
+    /**
+     * [finish] on a thread of its own, so that the caller (the UI thread) never waits for
+     * the queue to drain (up to a second at VGA); returns that thread at once. [onDone]
+     * gets, on it, the closed recorder and what closing it threw (null if nothing).
+     * Frames offered from now on are refused. Call once, instead of [finish].
+     */
+    fun finishInBackground(onDone: (R, Exception?) -> Unit): Thread {
+        stopping = true
+        val t = Thread(Finisher(onDone), "ecvo-recorder-finish")
+        t.isDaemon = true
+        t.start()
+        return t
+    }
+
+    private inner class Finisher(private val onDone: (R, Exception?) -> Unit) : Runnable {
+        override fun run() {
+            val error = try {
+                finish()
+                null
+            } catch (e: Exception) {
+                e
+            }
+            onDone(recorder, error)
+        }
     }
 
     /** The writer loop (a named class, not a lambda: the APK's dexer cannot desugar lambdas). */

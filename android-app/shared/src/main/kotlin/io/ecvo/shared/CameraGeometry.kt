@@ -197,3 +197,35 @@ object StreamSizes {
         return wide.minWith(compareBy<StreamSize>({ abs(it.aspect - depth.aspect) > 0.01 }, { abs(it.aspect - depth.aspect) }, { it.width }))
     }
 }
+
+/**
+ * The size the tracker works at, relative to the depth stream's. The tracker's memory and
+ * time grow with the pixel count (a VGA frame needs about 4x a QVGA one's), so a VGA ToF
+ * stream is tracked halved unless the user asks for its native size.
+ */
+enum class TrackingResolution(val label: String) {
+    /** Halved when the stream is wider than [AUTO_HALF_ABOVE_WIDTH] (VGA to QVGA), else native. */
+    AUTO("auto"),
+
+    /** The stream's own size. */
+    NATIVE("native"),
+
+    /** Half the stream's width and height (with intrinsics to match: `f / 2`, `(c + 0.5) / 2 - 0.5`). */
+    HALF("halved"),
+    ;
+
+    /** The tracker's frame size for a depth stream of [stream] (never below 16 pixels a side by halving). */
+    fun frameSize(stream: StreamSize): StreamSize {
+        val half = when (this) {
+            NATIVE -> false
+            HALF -> true
+            AUTO -> stream.width > AUTO_HALF_ABOVE_WIDTH
+        }
+        return if (half && stream.width >= 32 && stream.height >= 32) StreamSize(stream.width / 2, stream.height / 2) else stream
+    }
+
+    companion object {
+        /** [AUTO] halves streams wider than this. */
+        const val AUTO_HALF_ABOVE_WIDTH: Int = 320
+    }
+}

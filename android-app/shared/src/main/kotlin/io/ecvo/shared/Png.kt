@@ -96,16 +96,16 @@ object Png {
     /** Encodes `width * height` 8-bit gray values (row-major) as a PNG. */
     fun encodeGray8(
         pixels: ByteArray, width: Int, height: Int,
-        filter: PngFilter = PngFilter.ADAPTIVE, level: Int = Deflater.BEST_SPEED,
+        filter: PngFilter = PngFilter.ADAPTIVE, level: Int = Deflater.BEST_SPEED, strategy: Int = Deflater.DEFAULT_STRATEGY,
     ): ByteArray {
         require(pixels.size == width * height) { "gray image has ${pixels.size} values, expected ${width * height} (${width}x$height)" }
-        return encode(pixels, width, height, 8, 0, filter, level)
+        return encode(pixels, width, height, 8, 0, filter, level, strategy)
     }
 
     /** Encodes `width * height` unsigned 16-bit gray values (row-major) as a PNG with big-endian samples. */
     fun encodeGray16(
         pixels: ShortArray, width: Int, height: Int,
-        filter: PngFilter = PngFilter.ADAPTIVE, level: Int = Deflater.BEST_SPEED,
+        filter: PngFilter = PngFilter.ADAPTIVE, level: Int = Deflater.BEST_SPEED, strategy: Int = Deflater.DEFAULT_STRATEGY,
     ): ByteArray {
         require(pixels.size == width * height) { "16-bit image has ${pixels.size} values, expected ${width * height} (${width}x$height)" }
         val raw = ByteArray(pixels.size * 2)
@@ -114,11 +114,18 @@ object Png {
             raw[2 * i] = (v ushr 8).toByte()
             raw[2 * i + 1] = v.toByte()
         }
-        return encode(raw, width, height, 16, 0, filter, level)
+        return encode(raw, width, height, 16, 0, filter, level, strategy)
     }
 
-    /** Encodes already laid-out rows ([raw], big-endian samples) of any supported colour type. */
-    fun encode(raw: ByteArray, width: Int, height: Int, bitDepth: Int, colorType: Int, filter: PngFilter, level: Int): ByteArray {
+    /**
+     * Encodes already laid-out rows ([raw], big-endian samples) of any supported colour
+     * type, deflated at [level] with [strategy] (`Deflater.DEFAULT_STRATEGY`,
+     * `FILTERED`, `HUFFMAN_ONLY`).
+     */
+    fun encode(
+        raw: ByteArray, width: Int, height: Int, bitDepth: Int, colorType: Int, filter: PngFilter, level: Int,
+        strategy: Int = Deflater.DEFAULT_STRATEGY,
+    ): ByteArray {
         require(width in 1..Int.MAX_VALUE / 8 && height >= 1) { "${width}x$height is not a valid PNG size" }
         require(bitDepth == 8 || bitDepth == 16) { "bit depth $bitDepth is not 8 or 16" }
         val bpp = channels(colorType) * bitDepth / 8
@@ -158,6 +165,7 @@ object Png {
         writeChunk(out, "IHDR", ihdr, ihdr.size)
         val deflater = Deflater(level)
         try {
+            deflater.setStrategy(strategy)
             deflater.setInput(filtered)
             deflater.finish()
             val buf = ByteArray(64 * 1024)

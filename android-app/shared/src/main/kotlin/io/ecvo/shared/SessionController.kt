@@ -27,6 +27,13 @@ class SourceCallbacks internal constructor(private val controller: SessionContro
     /** Something the user should know that does not stop the source (any thread). */
     fun notice(message: String) = controller.onSourceNotice(token, message)
 
+    /**
+     * A camera instance was opened (camera thread, before its first frame): its frames go
+     * on the session's timeline after the earlier instances' ([CameraTimeline]);
+     * [realtimeClock]: `SENSOR_INFO_TIMESTAMP_SOURCE` is REALTIME.
+     */
+    fun cameraStarted(realtimeClock: Boolean) = controller.onCameraStarted(token, realtimeClock)
+
     /** The live source's mode, shown on screen (any thread). */
     fun mode(mode: LiveMode) = controller.onSourceMode(token, mode)
 
@@ -62,7 +69,7 @@ class SessionController(
     @Volatile var session: TrackingSession? = null
         private set
     private var source: SourceHandle? = null
-    private var kind = FrameSource.NONE
+    @Volatile private var kind = FrameSource.NONE
     private var frameCamera: CameraIntrinsics? = null
 
     /** What is running now. */
@@ -77,8 +84,12 @@ class SessionController(
      */
     fun start(kind: FrameSource, config: TrackerConfig, open: (SourceCallbacks) -> SourceHandle): Boolean {
         stopSource()
-        val tracker = newTrackerOrError(config) ?: return false
+        // The old tracker goes before the new one is made: two at once would need twice
+        // the memory (about 260 MB each at VGA).
         session?.close()
+        session = null
+        trajectory.clear()
+        val tracker = newTrackerOrError(config) ?: return false
         session = TrackingSession(tracker) { msg -> post { presenter.onNotice(msg) } }
         frameCamera = CameraIntrinsics(config.width, config.height, config.fx, config.fy, config.cx, config.cy, if (config.depthScale > 0) config.depthScale else 1000.0)
         trajectory.clear()
@@ -96,6 +107,7 @@ class SessionController(
     private fun openSource(kind: FrameSource, open: (SourceCallbacks) -> SourceHandle): Boolean {
         val t = token.incrementAndGet()
         rate.clear()
+        paused = false
         presenter.onStarted(kind, nowNs())
         this.kind = kind
         return try {
@@ -124,10 +136,14 @@ class SessionController(
         if (!isCurrent(t)) return
         val s = session ?: return
         try {
-            s.push(timestampNs, depthMm, intensity)
+            s.push(timestampNs, depthMm, intensity, if (kind == FrameSource.LIVE) nowNs() else timestampNs)
         } catch (e: Exception) {
             onSourceFailed(t, describe("Tracking stopped", e))
         }
+    }
+
+    internal fun onCameraStarted(t: Long, realtimeClock: Boolean) {
+        if (isCurrent(t)) session?.timeline?.newInstance(realtimeClock)
     }
 
     internal fun onSourceFailed(t: Long, message: String) = post { fail(t, message) }
@@ -156,6 +172,7 @@ class SessionController(
         val s = source
         source = null
         kind = FrameSource.NONE
+        paused = false
         if (s != null) {
             try {
                 s.stop()
@@ -165,6 +182,30 @@ class SessionController(
         }
         stopRecording()
         presenter.onStopped()
+    }
+
+    /** Whether the running source is paused ([pause]). */
+    var paused: Boolean = false
+        private set
+
+    /** Pauses the running source in place, if it can (a replay); true if it did. */
+    fun pause(): Boolean {
+        val s = source as? PausableSource ?: return false
+        if (paused) return true
+        s.pause()
+        paused = true
+        presenter.onPaused(true, nowNs())
+        return true
+    }
+
+    /** Resumes a [pause]d source; true if it did. */
+    fun resumePaused(): Boolean {
+        val s = source as? PausableSource ?: return false
+        if (!paused) return false
+        s.resume()
+        paused = false
+        presenter.onPaused(false, nowNs())
+        return true
     }
 
     /** Stops everything and releases the tracker. */
@@ -197,10 +238,13 @@ class SessionController(
             // that long); draw on from the window's start.
             if (trajectory.nextIndex < stats.trajectoryStart) trajectory.skipTo(stats.trajectoryStart)
             trajectory.append(t.trajectorySince(trajectory.nextIndex))
+            presenter.onDistance(trajectory.distanceM)
             ts
         } catch (e: IllegalStateException) {
             Tracker.NO_POSE // closed between the check and the calls
         } catch (e: RuntimeException) {
+            // The screen says "Error": the source stops too, rather than feed a tracker that fails.
+            stopSource()
             presenter.onError(describe("Reading the tracker failed", e))
             Tracker.NO_POSE
         }
@@ -227,16 +271,21 @@ class SessionController(
     /** Frames the current session's running or last recording had no room for (its queue was full). */
     val recordingDropped: Long get() = session?.recordingDropped ?: 0L
 
-    /** Stops recording (waits for the queued frames to be written); the finished recorder, or null. */
-    fun stopRecording(): StreamRecorder? {
-        val r = try {
-            session?.stopRecording()
-        } catch (e: Exception) {
-            presenter.onNotice(describe("Finishing the recording failed", e))
-            null
-        }
+    /**
+     * Stops recording and returns at once (never waits for the queue to drain on the
+     * calling UI thread): false if none was running. When the recorder is written and
+     * closed, [onFinished] runs through [post] with the result (a failure also becomes a
+     * notice).
+     */
+    fun stopRecording(onFinished: (RecordingResult) -> Unit = {}): Boolean {
+        val stopped = session?.stopRecording { res ->
+            post {
+                res.error?.let { presenter.onNotice(it) }
+                onFinished(res)
+            }
+        } ?: false
         presenter.onRecording(false)
-        return r
+        return stopped
     }
 
     companion object {

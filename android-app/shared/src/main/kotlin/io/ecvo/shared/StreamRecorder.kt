@@ -73,8 +73,8 @@ class StreamRecorder(override val dir: File, val camera: CameraIntrinsics) : Fra
         require(micros > lastMicros) { "$dir: timestamp $name is not after the previous frame's" }
         val rgbRel = "rgb/$name.png"
         val depthRel = "depth/$name.png"
-        File(dir, rgbRel).writeBytes(Png.encodeGray8(intensity, camera.width, camera.height))
-        File(dir, depthRel).writeBytes(Png.encodeGray16(depth, camera.width, camera.height))
+        File(dir, rgbRel).writeBytes(Png.encodeGray8(intensity, camera.width, camera.height, FILTER, 1, STRATEGY))
+        File(dir, depthRel).writeBytes(Png.encodeGray16(depth, camera.width, camera.height, FILTER, 1, STRATEGY))
         rgbList.write("$name $rgbRel\n"); rgbList.flush()
         depthList.write("$name $depthRel\n"); depthList.flush()
         lastMicros = micros
@@ -98,6 +98,15 @@ class StreamRecorder(override val dir: File, val camera: CameraIntrinsics) : Fra
     }
 
     companion object {
+        /**
+         * The recorder's PNG settings: the SUB filter and Huffman-only deflate. On the
+         * 640x480 frames of TUM fr1/xyz this encodes a frame's two PNGs in 0.38x-0.39x the
+         * median time of adaptive filtering at deflate level 1 (the old setting), at about the
+         * same size (`scripts/kotlin/PngBench.kt`; figures in `android-app/README.md`).
+         */
+        val FILTER: PngFilter = PngFilter.SUB
+        const val STRATEGY: Int = java.util.zip.Deflater.HUFFMAN_ONLY
+
         /** Header of `rgb.txt`, as the host tools write it. */
         const val RGB_HEADER: String = "# color images (8-bit gray)\n# file: 'ecvo recording'\n# timestamp filename\n"
 

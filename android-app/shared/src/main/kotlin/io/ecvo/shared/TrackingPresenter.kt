@@ -12,15 +12,15 @@ enum class StatusKind { IDLE, INITIALISING, TRACKING, LOST, ERROR }
 
 /** What the status area shows, as ready-to-display English text. */
 data class StatusText(
-    /** "Stopped", "Initialising", "Tracking", "Lost", "Error". */
+    /** "Stopped", "Paused", "Initialising", "Tracking", "Lost", "Error". */
     val state: String,
     val kind: StatusKind,
     /** "12.3 ms/frame" or "– ms/frame" before the first tracked frame. */
     val timing: String,
-    /** "refs L1 12 · L2 3". */
+    /** "refs L1 12 · L2 3 · 1.25 m travelled" (the distance once a frame was tracked). */
     val references: String,
     /**
-     * "120 frames · 3 dropped · 1 lost" (and "· 5 without colour" for live depth frames
+     * "120 frames · 3 dropped · 1 lost · 1 re-anchored" (started afresh after a loss; and "· 5 without colour" for live depth frames
      * dropped unpaired, "· 4 not recorded" for frames the recorder could not keep up
      * with, "· 2 bad timestamps skipped" for frames the tracker refused).
      */
@@ -62,6 +62,8 @@ class TrackingPresenter(
     private var skippedTimestamps = 0L
     private var recordingDropped = 0L
     private var liveMode: LiveMode? = null
+    private var paused = false
+    private var distanceM = 0.0
     private val notices = LinkedHashSet<String>()
 
     /** The result of looking for a camera with DEPTH_OUTPUT. */
@@ -73,11 +75,13 @@ class TrackingPresenter(
     /** A source started at wall-clock [nowNs]; clears the previous run's error, notices and numbers. */
     fun onStarted(src: FrameSource, nowNs: Long) {
         source = src
+        paused = false
         error = null
         notices.clear()
         fps = 0.0
         droppedNoColour = 0
         skippedTimestamps = 0
+        distanceM = 0.0
         liveMode = null
         state = TrackingState.INITIALISING
         stats = TrackerStats.EMPTY
@@ -90,6 +94,14 @@ class TrackingPresenter(
     fun onStopped() {
         source = FrameSource.NONE
         stalled = false
+        paused = false
+    }
+
+    /** The source was paused or resumed at wall-clock [nowNs] (no stall is reported while paused). */
+    fun onPaused(on: Boolean, nowNs: Long) {
+        paused = on
+        stalled = false
+        lastPoseChangeWallNs = nowNs
     }
 
     /** Something failed (the message of an exception); shown until the next start. */
@@ -110,6 +122,9 @@ class TrackingPresenter(
         this.fps = fps
         this.droppedNoColour = droppedNoColour
     }
+
+    /** The length of the tracked path so far, in metres. */
+    fun onDistance(metres: Double) { distanceM = metres }
 
     /** The live source's mode (it may fall back to depth alone during the session). */
     fun onLiveMode(mode: LiveMode) { liveMode = mode }
@@ -134,6 +149,7 @@ class TrackingPresenter(
             lastPoseNs = poseTimestampNs
             lastPoseChangeWallNs = nowNs
         }
+        if (paused) lastPoseChangeWallNs = nowNs
         stalled = source != FrameSource.NONE && nowNs - lastPoseChangeWallNs > stallAfterNs
     }
 
@@ -143,12 +159,14 @@ class TrackingPresenter(
             val (label, kind) = when {
                 error != null -> "Error" to StatusKind.ERROR
                 source == FrameSource.NONE -> "Stopped" to StatusKind.IDLE
+                paused -> "Paused" to StatusKind.IDLE
                 state == TrackingState.INITIALISING -> "Initialising" to StatusKind.INITIALISING
                 state == TrackingState.TRACKING -> "Tracking" to StatusKind.TRACKING
                 else -> "Lost" to StatusKind.LOST
             }
             val timing = if (stats.framesTracked > 0) String.format(Locale.ROOT, "%.1f ms/frame", stats.totalMs) else "– ms/frame"
-            val refs = "refs L1 ${stats.referencesL1} · L2 ${stats.referencesL2}"
+            val refs = "refs L1 ${stats.referencesL1} · L2 ${stats.referencesL2}" +
+                if (stats.framesTracked > 0) String.format(Locale.ROOT, " · %.2f m travelled", distanceM) else ""
             val frames = buildString {
                 append(stats.framesTracked).append(" frames")
                 if (stats.framesDropped > 0) append(" · ").append(stats.framesDropped).append(" dropped")
@@ -156,6 +174,7 @@ class TrackingPresenter(
                 if (recordingDropped > 0) append(" · ").append(recordingDropped).append(" not recorded")
                 if (skippedTimestamps > 0) append(" · ").append(skippedTimestamps).append(" bad timestamps skipped")
                 if (stats.lostFrames > 0) append(" · ").append(stats.lostFrames).append(" lost")
+                if (stats.reanchors > 0) append(" · ").append(stats.reanchors).append(" re-anchored")
             }
             val stages = if (stats.framesTracked == 0L) "" else String.format(
                 Locale.ROOT, "%.1f fps · filter %.1f · tracker %.1f · latency %.1f ms", fps, stats.filterMs, stats.trackerMs, stats.latencyMs,

@@ -23,9 +23,16 @@ class TrajectoryBuffer(val maxPoints: Int = 4096) {
     /** The poses to draw (a thinned copy of the trajectory once it is long). */
     val poses: List<TimedPose> get() = kept
 
+    /** Path length so far in metres: the sum of the distances between consecutive poses (every pose, not only those kept). */
+    var distanceM: Double = 0.0
+        private set
+    private var last: TimedPose? = null
+
     /** Appends the poses from index [nextIndex] on. */
     fun append(newPoses: List<TimedPose>) {
         for (p in newPoses) {
+            last?.let { q -> distanceM += kotlin.math.sqrt((p.tx - q.tx) * (p.tx - q.tx) + (p.ty - q.ty) * (p.ty - q.ty) + (p.tz - q.tz) * (p.tz - q.tz)) }
+            last = p
             if (nextIndex % stride == 0) {
                 if (kept.size >= maxPoints) thin()
                 if (nextIndex % stride == 0) kept += p
@@ -53,6 +60,8 @@ class TrajectoryBuffer(val maxPoints: Int = 4096) {
     /** Forgets everything (a new session). */
     fun clear() {
         kept.clear()
+        distanceM = 0.0
+        last = null
         stride = 1
         nextIndex = 0
     }

@@ -88,6 +88,42 @@ class CameraGeometryTest {
     private fun <T> assertNotNullAnd(v: T?): T { assertNotNull(v); return v!! }
 
     @Test
+    fun aVgaStreamTrackedHalvedHasHalfTheSizeAndMatchingIntrinsics() {
+        val vga = StreamSize(640, 480)
+        assertEquals(StreamSize(320, 240), TrackingResolution.HALF.frameSize(vga))
+        assertEquals(StreamSize(320, 240), TrackingResolution.AUTO.frameSize(vga))
+        assertEquals(vga, TrackingResolution.NATIVE.frameSize(vga))
+        // A 240x180 ToF stream stays native in auto.
+        assertEquals(StreamSize(240, 180), TrackingResolution.AUTO.frameSize(StreamSize(240, 180)))
+        assertEquals(StreamSize(120, 90), TrackingResolution.HALF.frameSize(StreamSize(240, 180)))
+
+        val src = CameraIntrinsics(640, 480, 500.0, 505.0, 319.2, 241.7)
+        val half = TrackingResolution.HALF.frameSize(vga)
+        val remap = DepthRemap.create(src, half.width, half.height)
+        val cam = remap.camera
+        assertEquals(320, cam.width); assertEquals(240, cam.height)
+        assertEquals(250.0, cam.fx, 1e-12); assertEquals(252.5, cam.fy, 1e-12)
+        assertEquals((319.2 + 0.5) / 2 - 0.5, cam.cx, 1e-12); assertEquals((241.7 + 0.5) / 2 - 0.5, cam.cy, 1e-12)
+        // A 3D point lands where the full-size pixel's centre lands, scaled: (u + 0.5) / 2 - 0.5.
+        val (x, y, z) = Triple(0.3, -0.2, 1.5)
+        val uFull = src.fx * x / z + src.cx
+        val vFull = src.fy * y / z + src.cy
+        assertEquals((uFull + 0.5) / 2 - 0.5, cam.fx * x / z + cam.cx, 1e-9)
+        assertEquals((vFull + 0.5) / 2 - 0.5, cam.fy * y / z + cam.cy, 1e-9)
+        // Each tracker pixel reads one of the 2x2 stream pixels it covers (nearest depth, no mixing across edges).
+        val seen = HashSet<Int>()
+        for (v in 0 until 240) for (u in 0 until 320) {
+            val j = remap.sourceIndex(v * 320 + u)
+            assertTrue("($u, $v) reads $j", j % 640 in 2 * u..2 * u + 1 && j / 640 in 2 * v..2 * v + 1)
+            assertTrue(seen.add(j))
+        }
+        val depth = ShortArray(640 * 480) { (it % 640 + 1).toShort() }
+        val out = remap.apply(depth)
+        assertEquals(320 * 240, out.size)
+        assertTrue(out[5].toInt() in 11..12)
+    }
+
+    @Test
     fun streamSizesAvoidUpsamplingAndPreferTheAspect() {
         val sizes = listOf(StreamSize(240, 180), StreamSize(640, 480), StreamSize(320, 240), StreamSize(640, 360))
         // 640x360 is 16:9 and large enough; 320x240's 16:9 crop is 320x180 too, and smaller, but needs a crop.

@@ -92,4 +92,33 @@ class PreviewTest {
         assertEquals(0xFF010101.toInt(), f.takePreview(PreviewKind.INTENSITY)!![0])
         assertEquals(null, f.takePreview(PreviewKind.INTENSITY)) // nothing new since
     }
+
+    @Test
+    fun eachSettingsRowStepsThroughItsValuesAndSurvivesARestart() {
+        var s = AppSettings()
+        for (row in SettingsMenu.Row.entries) {
+            val before = SettingsMenu.value(s, row)
+            val stepped = SettingsMenu.step(s, row)
+            assertTrue(row.name, SettingsMenu.value(stepped, row) != before)
+            assertEquals(stepped, AppSettings.fromMap(stepped.toMap()))
+            s = stepped
+        }
+        // Tracking resolution cycles auto -> native -> halved -> auto; replay speed 1 -> 2 -> 4 -> 0.5 -> 1.
+        val r = SettingsMenu.Row.RESOLUTION
+        assertEquals(listOf("native", "halved", "auto"), generateSequence(AppSettings()) { SettingsMenu.step(it, r) }.drop(1).take(3).map { it.trackingResolution.label }.toList())
+        val sp = SettingsMenu.Row.REPLAY_SPEED
+        assertEquals(listOf(2.0, 4.0, 0.5, 1.0), generateSequence(AppSettings()) { SettingsMenu.step(it, sp) }.drop(1).take(4).map { it.replaySpeed }.toList())
+        // A stored speed that is not offered falls back to 1.
+        assertEquals(1.0, AppSettings.fromMap(mapOf(AppSettings.KEY_REPLAY_SPEED to "3.0")).replaySpeed, 0.0)
+        // The remembered fallbacks are shown, and Live cameras: depth only -> auto forgets them.
+        val remembered = AppSettings().rememberDepthOnly("5+0")
+        assertTrue(SettingsMenu.value(remembered, SettingsMenu.Row.LIVE_CAMERAS).contains("5+0"))
+        val toDepthOnly = SettingsMenu.step(remembered, SettingsMenu.Row.LIVE_CAMERAS)
+        assertEquals(LiveCameras.DEPTH_ONLY, toDepthOnly.liveCameras)
+        assertTrue(SettingsMenu.step(toDepthOnly, SettingsMenu.Row.LIVE_CAMERAS).depthOnlyPairs.isEmpty())
+        // The tracker's configuration follows the frames' camera and the settings.
+        val c = AppSettings(pointCloud = true).trackerConfig(CameraIntrinsics(320, 240, 250.0, 250.0, 159.5, 119.5), FrameSource.LIVE)
+        assertEquals(320, c.width); assertEquals(250.0, c.fx, 0.0); assertTrue(c.pointCloud)
+        assertEquals(io.ecvo.Admission.LIVE, c.admission)
+    }
 }

@@ -110,4 +110,73 @@ class ExportSelectionTest {
         assertTrue(Recordings.delete(root, a, inUse = b))
         assertEquals(listOf("20260102-100000"), Recordings.list(root).map { it.name })
     }
+
+    /** Unzips [zip] into a new folder; returns it. */
+    private fun unzip(zip: File): File {
+        val out = TestSupport.tempDir()
+        ZipFile(zip).use { z ->
+            for (e in z.entries()) {
+                val f = File(out, e.name)
+                f.parentFile.mkdirs()
+                z.getInputStream(e).use { i -> f.outputStream().use { o -> i.copyTo(o) } }
+            }
+        }
+        return out
+    }
+
+    @Test
+    fun aStreamBeingWrittenIsZippedAsItsListsSaidWithoutACopy() {
+        val root = TestSupport.tempDir()
+        val dir = File(root, "live")
+        val rec = StreamRecorder(dir, cam)
+        for (i in 1..3) rec.writeFrame(i * 1_000_000L, ShortArray(64) { i.toShort() }, ByteArray(64))
+        // Mid-frame 4: its PNGs are on disk, its rgb.txt line is half written, depth.txt has none yet.
+        File(dir, "rgb/0.004000.png").writeBytes(Png.encodeGray8(ByteArray(64), 8, 8))
+        File(dir, "depth/0.004000.png").writeBytes(byteArrayOf(1, 2, 3)) // a PNG still being written
+        File(dir, "rgb.txt").appendText("0.004000 rgb/0.0040")
+        val exports = File(TestSupport.tempDir(), "exports")
+        val zip = ExportFiles.pack(ExportPlan(false, dir), exports, "e") { }
+        ZipFile(zip).use { z ->
+            val names = z.entries().toList().map { it.name }
+            assertEquals(3, names.count { it.startsWith("e/stream/depth/") })
+            assertFalse(names.contains("e/stream/depth/0.004000.png"))
+            assertFalse(names.contains("e/stream/rgb/0.004000.png"))
+            // PNGs stored as they are, the lists deflated.
+            assertEquals(java.util.zip.ZipEntry.STORED, z.getEntry("e/stream/depth/0.003000.png").method)
+            assertEquals(java.util.zip.ZipEntry.DEFLATED, z.getEntry("e/stream/rgb.txt").method)
+        }
+        val stream = File(unzip(zip), "e/stream")
+        assertFalse(File(stream, "rgb.txt").readText().contains("0.0040"))
+        val r = StreamReader(DirectoryFiles(stream))
+        assertEquals(3, r.frames.size)
+        assertEquals(3, r.toList().last().depth[0].toInt())
+        // Nothing but the zip is written beside it (no copy of the recording).
+        assertEquals(listOf(zip.name), exports.list()!!.toList())
+        rec.close()
+    }
+
+    @Test
+    fun exportsTakenWhileARecorderWritesAreAlwaysReadableStreams() {
+        val dir = File(TestSupport.tempDir(), "rec")
+        val cam64 = CameraIntrinsics(64, 48, 60.0, 60.0, 31.5, 23.5)
+        val rec = StreamRecorder(dir, cam64)
+        rec.writeFrame(1_000_000L, ShortArray(64 * 48) { 1001 }, ByteArray(64 * 48) { 5 })
+        val writing = Thread {
+            for (i in 2..400) rec.writeFrame(i * 1_000_000L, ShortArray(64 * 48) { (1000 + i).toShort() }, ByteArray(64 * 48) { i.toByte() })
+        }
+        writing.start()
+        val exports = File(TestSupport.tempDir(), "exports")
+        val counts = ArrayList<Int>()
+        while (writing.isAlive || counts.isEmpty()) {
+            val zip = ExportFiles.pack(ExportPlan(false, dir), exports, "x") { }
+            val frames = StreamReader(DirectoryFiles(File(unzip(zip), zip.name.removeSuffix(".zip") + "/stream"))).toList()
+            // Every listed frame decodes, with the values its frame was written with.
+            frames.forEachIndexed { k, f -> assertEquals(1000 + k + 1, f.depth[0].toInt()) }
+            counts += frames.size
+        }
+        writing.join()
+        rec.close()
+        assertTrue(counts.toString(), counts.zipWithNext().all { (a, b) -> b >= a })
+        assertTrue(counts.first() >= 1)
+    }
 }

@@ -50,7 +50,7 @@ class PresenterTest {
         val s = p.status
         assertEquals(StatusKind.TRACKING, s.kind)
         assertEquals("12.3 ms/frame", s.timing)
-        assertEquals("refs L1 12 · L2 3", s.references)
+        assertEquals("refs L1 12 · L2 3 · 0.00 m travelled", s.references)
         assertEquals("120 frames · 4 dropped · 1 lost", s.frames)
         assertNull(s.message)
         p.onTrackerUpdate(TrackingState.LOST, stats(121, 12.0), 5 * sec + 33, sec + 33)
@@ -91,5 +91,36 @@ class PresenterTest {
         assertEquals("Initialising", p.status.state)
         p.onRecording(true)
         assertTrue(p.status.recording)
+    }
+
+    @Test
+    fun theKeepScreenOnFlagChangesOnlyWhenTheStateDoes() {
+        val sw = ScreenOnSwitch()
+        // 20 polls a second: the window flag is touched at the first poll and at each change only.
+        val live = listOf(false, false, true, true, true, true, false, false, true)
+        val changes = live.map { sw.update(it) }
+        assertEquals(listOf(false, null, true, null, null, null, false, null, true), changes)
+        assertEquals(4, changes.count { it != null })
+    }
+
+    @Test
+    fun theDistanceTravelledSumsEveryPoseAndIsShown() {
+        val b = TrajectoryBuffer(maxPoints = 4)
+        fun pose(x: Double, y: Double, z: Double) = io.ecvo.TimedPose(0.0, x, y, z, 0.0, 0.0, 0.0, 1.0)
+        b.append(listOf(pose(0.0, 0.0, 0.0), pose(3.0, 4.0, 0.0)))
+        b.append(listOf(pose(3.0, 4.0, 12.0)))
+        assertEquals(17.0, b.distanceM, 1e-12)
+        // Thinning the drawn path (8 more poses, 1 m apart) does not change the length.
+        b.append((1..8).map { pose(3.0, 4.0, 12.0 + it) })
+        assertTrue(b.poses.size <= 4)
+        assertEquals(25.0, b.distanceM, 1e-12)
+        val p = TrackingPresenter()
+        p.onStarted(FrameSource.REPLAY, 0)
+        p.onTrackerUpdate(TrackingState.TRACKING, TrackerStats.EMPTY.copy(framesTracked = 11, reanchors = 1), 1, 0)
+        p.onDistance(b.distanceM)
+        assertTrue(p.status.references, p.status.references.endsWith("25.00 m travelled"))
+        assertTrue(p.status.frames, p.status.frames.contains("1 re-anchored"))
+        b.clear()
+        assertEquals(0.0, b.distanceM, 0.0)
     }
 }

@@ -91,10 +91,50 @@ class RecorderThreadTest {
         s.startRecording(StreamRecorder(dir, cam))
         for (i in 1..20) assertEquals(PushStatus.ACCEPTED, s.push(i * 33_000_000L, depth, gray))
         assertTrue(s.recording)
-        val rec = s.stopRecording()!!
-        assertEquals(20, rec.framesWritten)
+        val done = CountDownLatch(1)
+        var result: RecordingResult? = null
+        var finisher: Thread? = null
+        assertTrue(s.stopRecording { r -> result = r; finisher = Thread.currentThread(); done.countDown() })
+        assertFalse(s.recording)
+        assertTrue(done.await(10, TimeUnit.SECONDS))
+        assertTrue("finished on the calling thread", finisher !== Thread.currentThread())
+        val res = result!!
+        assertEquals(20, res.recorder.framesWritten)
+        assertEquals(0L, res.dropped)
+        assertNull(res.error)
         assertEquals(0L, s.recordingDropped)
+        assertFalse(s.stopRecording()) // nothing left to stop
         assertEquals(20, StreamReader(DirectoryFiles(dir)).frames.size)
         s.close()
+    }
+
+    @Test
+    fun finishingInTheBackgroundReturnsAtOnceThenReportsTheDropCount() {
+        val fake = BlockingRecorder(File("unused"))
+        val r = AsyncRecorder(fake, capacity = 2)
+        assertTrue(r.offer(1, depth, gray))
+        assertTrue(fake.entered.await(5, TimeUnit.SECONDS)) // the writer is stuck in frame 1
+        assertEquals(listOf(true, true, false, false), (2L..5L).map { r.offer(it, depth, gray) })
+        val done = CountDownLatch(1)
+        var doneOn: Thread? = null
+        var closedBeforeDone = false
+        val t0 = System.nanoTime()
+        val finisher = r.finishInBackground { rec, e ->
+            assertTrue(rec === fake)
+            assertNull(e)
+            closedBeforeDone = fake.closed
+            doneOn = Thread.currentThread()
+            done.countDown()
+        }
+        // The caller does not wait for the stuck writer.
+        assertTrue("finishInBackground blocked", System.nanoTime() - t0 < 500_000_000L)
+        assertEquals(1L, done.count)
+        assertFalse("frames after the stop are refused", r.offer(6, depth, gray))
+        fake.release.countDown()
+        assertTrue(done.await(10, TimeUnit.SECONDS))
+        assertTrue(doneOn === finisher)
+        assertTrue(closedBeforeDone)
+        assertEquals(listOf(1L, 2L, 3L), fake.written.map { it.first }) // the queue was drained
+        assertEquals(2L, r.framesDropped)
     }
 }

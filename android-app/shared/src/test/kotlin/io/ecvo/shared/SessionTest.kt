@@ -72,7 +72,7 @@ class SessionTest {
         TrackingSession(fake).use { s ->
             s.startRecording(StreamRecorder(dir, cam))
             for (i in 1..6) s.push(i * 33_000_000L, depth, gray)
-            assertEquals(6, s.stopRecording()!!.framesWritten)
+            assertEquals(6, s.stopRecordingAndWait()!!.recorder.framesWritten)
         }
         assertEquals(6, StreamReader(DirectoryFiles(dir)).frames.size)
     }
@@ -305,8 +305,44 @@ class SessionTest {
         val dir = File(TestSupport.tempDir(), "ok")
         assertTrue(c.startRecording { StreamRecorder(dir, it) })
         cb.frame(1_000_000, depth, gray)
-        c.stopSource() // stopping the source finishes the recording
+        c.stopSource() // stopping the source finishes the recording, on the recorder's thread
         assertFalse(c.presenter.status.recording)
-        assertEquals(1, Recordings.list(dir.parentFile).first { it.dir == dir }.frames)
+        val deadline = System.nanoTime() + 5_000_000_000L
+        fun frames() = Recordings.list(dir.parentFile).first { it.dir == dir }.frames
+        while (frames() < 1 && System.nanoTime() < deadline) Thread.sleep(5)
+        assertEquals(1, frames())
+    }
+
+    @Test
+    fun theOldTrackerIsClosedBeforeTheNewOneIsCreated() {
+        val made = ArrayList<FakeTracker>()
+        val openAtCreate = ArrayList<Int>()
+        val c = SessionController(
+            newTracker = { openAtCreate += made.count { !it.isClosed }; FakeTracker().also { made += it } },
+            nativeLibraryError = { null }, post = { it() }, nowNs = { 0L },
+        )
+        repeat(3) { assertTrue(c.start(FrameSource.REPLAY, config) { Source() }) }
+        assertEquals(listOf(0, 0, 0), openAtCreate)
+        assertEquals(listOf(true, true, false), made.map { it.isClosed })
+        // A start whose tracker fails leaves no session behind (Share has nothing of the previous one).
+        val failing = SessionController(newTracker = { throw IllegalArgumentException("bad config") }, nativeLibraryError = { null }, post = { it() })
+        assertFalse(failing.start(FrameSource.REPLAY, config) { Source() })
+        assertNull(failing.session)
+    }
+
+    @Test
+    fun aPollErrorStopsTheSourceAsWellAsShowingError() {
+        val inner = FakeTracker()
+        val failing = object : PoseTracker by inner {
+            override fun stats(): TrackerStats = throw RuntimeException("native state corrupted")
+        }
+        val c = SessionController(newTracker = { failing }, nativeLibraryError = { null }, post = { it() }, nowNs = { 0L })
+        val src = Source()
+        assertTrue(c.start(FrameSource.LIVE, config) { src })
+        assertEquals(Tracker.NO_POSE, c.poll(FloatArray(16)))
+        assertEquals(StatusKind.ERROR, c.presenter.status.kind)
+        assertTrue(c.presenter.status.message!!, c.presenter.status.message!!.contains("native state corrupted"))
+        assertEquals(1, src.stopped)
+        assertEquals(FrameSource.NONE, c.running)
     }
 }
