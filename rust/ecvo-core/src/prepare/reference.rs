@@ -137,6 +137,7 @@ impl OldPreparer {
         out.templates
             .resize_with(self.schedule.len(), Template::default);
         for (step, t) in self.schedule.iter().zip(&mut out.templates) {
+            t.pyramid_level = step.pyramid_level;
             build_template(&out.levels[step.pyramid_level], step.stride, t);
         }
         Ok(())
