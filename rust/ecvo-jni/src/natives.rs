@@ -33,7 +33,7 @@ macro_rules! bridge {
         pub const NATIVE_METHODS: &[NativeMethod<'static>] = &[$($konst),*];
 
         /// `(exported symbol, JNI signature)` of every native method, from the same
-        /// declarations as [`NATIVE_METHODS`]; `tests/signatures.rs` compares them with
+        /// declarations as [`NATIVE_METHODS`]; `tests/it/signatures.rs` compares them with
         /// `NativeBridge.kt`.
         pub fn declared_signatures() -> Vec<(&'static str, String)> {
             vec![$(

@@ -2,7 +2,7 @@
 //! fast writes the poses of `SynthSequence::fast_handheld_320x180`, and the motion flags
 //! are checked.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 
