@@ -22,6 +22,7 @@ pub mod error;
 pub mod memory;
 pub mod motion;
 pub mod noise;
+pub mod num;
 pub mod odometry;
 pub mod prepare;
 pub mod prior;
@@ -39,6 +40,7 @@ pub use config::{
 pub use error::{Error, Result};
 pub use memory::{DEFAULT_MEMORY_BUDGET, MemoryEstimate};
 pub use motion::{MotionEstimator, MotionResult};
+pub use num::Num;
 pub use nalgebra;
 pub use prepare::simd::path_name as simd_path;
 pub use prepare::{PreparedFrame, Preparer};
