@@ -8,6 +8,7 @@
 mod bad_input;
 mod common;
 mod hostile_input;
+mod output;
 mod real_data;
 mod synth_motion;
 mod synth_orbit;
