@@ -7,6 +7,7 @@
 
 mod common;
 mod dense_timestamps;
+mod derive;
 mod eval;
 mod ply;
 mod properties;
