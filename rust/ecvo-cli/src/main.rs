@@ -210,7 +210,12 @@ enum Command {
         #[arg(help_heading = "Method", display_order = 11, long, value_enum, default_value_t = ModeArg::L2)]
         mode: ModeArg,
         /// Reference levels overriding the preset's, e.g. "30mm:7deg,120mm:12deg".
-        #[arg(help_heading = "Method", display_order = 12, long, allow_hyphen_values = true)]
+        #[arg(
+            help_heading = "Method",
+            display_order = 12,
+            long,
+            allow_hyphen_values = true
+        )]
         levels: Option<String>,
         /// Switch the bilateral depth filter off. With the phone preset keep the
         /// contour filter off too (--no-contour-filter): at its 20° it reads raw depth
@@ -230,7 +235,12 @@ enum Command {
         #[arg(help_heading = "Output", display_order = 42, long, default_value_t = 4)]
         cloud_stride: usize,
         /// Point cloud with --mode naive: take every Nth frame.
-        #[arg(help_heading = "Output", display_order = 43, long, default_value_t = 15)]
+        #[arg(
+            help_heading = "Output",
+            display_order = 43,
+            long,
+            default_value_t = 15
+        )]
         cloud_every: usize,
         /// Plane of the top view in trajectory.svg.
         #[arg(help_heading = "Output", display_order = 41, long, value_enum, default_value_t = Plane::Xz)]
@@ -396,7 +406,12 @@ fn dispatch(command: Command) -> Result<()> {
             } else {
                 frame_steps.iter().map(|&s| s as usize).collect()
             };
-            table::table_command(&seqs, &track.settings(Mode::L2, &limits), &steps, json.as_deref())
+            table::table_command(
+                &seqs,
+                &track.settings(Mode::L2, &limits),
+                &steps,
+                json.as_deref(),
+            )
         }
         Command::Synth {
             out,
@@ -456,19 +471,27 @@ fn eval_command(gt_path: &Path, est_path: &Path, as_json: bool) -> Result<()> {
     } else {
         outln!(
             "ATE RMSE (absolute trajectory error after rigid alignment): {:.4} m (mean {:.4}, median {:.4}, max {:.4}); {} poses",
-            a.rmse, a.mean, a.median, a.max, a.count
+            a.rmse,
+            a.mean,
+            a.median,
+            a.max,
+            a.count
         );
         match &eval.rpe_s {
             Some(r) => outln!(
                 "RPE over 1 s (drift), RMSE: {:.4} m/s, {:.3} deg/s; {} pairs",
-                r.trans.rmse, r.rot_deg.rmse, r.trans.count
+                r.trans.rmse,
+                r.rot_deg.rmse,
+                r.trans.count
             ),
             None => outln!("RPE over 1 s: n/a (no pair of poses 1 s apart could be scored)"),
         }
         match &eval.rpe_frame {
             Some(r) => outln!(
                 "RPE per frame (consecutive poses), RMSE: {:.5} m, {:.4} deg; {} pairs",
-                r.trans.rmse, r.rot_deg.rmse, r.trans.count
+                r.trans.rmse,
+                r.rot_deg.rmse,
+                r.trans.count
             ),
             None => outln!("RPE per frame: n/a (no consecutive poses could be scored)"),
         }

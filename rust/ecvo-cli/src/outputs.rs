@@ -352,7 +352,9 @@ mod tests {
             json!({"model": "mixed", "half_log2_alpha": 2, "alpha": 2.0})
         );
         assert_eq!(
-            depth_noise_json(DepthNoiseModel::Mixed { half_log2_alpha: -7 })["alpha"],
+            depth_noise_json(DepthNoiseModel::Mixed {
+                half_log2_alpha: -7
+            })["alpha"],
             json!(2f64.powf(-3.5))
         );
         assert_eq!(

@@ -40,8 +40,8 @@ pub use config::{
 pub use error::{Error, Result};
 pub use memory::{DEFAULT_MEMORY_BUDGET, MemoryEstimate};
 pub use motion::{MotionEstimator, MotionResult};
-pub use num::Num;
 pub use nalgebra;
+pub use num::Num;
 pub use prepare::simd::path_name as simd_path;
 pub use prepare::{PreparedFrame, Preparer};
 pub use tracker::{Counters, FrameOutput, Odometry, Tracker, TrackingState, comp, frame_to_frame};

@@ -66,13 +66,18 @@ fn div_round_even(n: u32, d: u32) -> u32 {
 /// unrounded, then rounded to nearest (ties to even). An odd last row or column is left
 /// out.
 pub fn half_gray(rgb: &[u8], width: usize, height: usize) -> Vec<u8> {
-    let milli = |i: usize| 299 * rgb[3 * i] as u32 + 587 * rgb[3 * i + 1] as u32 + 114 * rgb[3 * i + 2] as u32;
+    let milli = |i: usize| {
+        299 * rgb[3 * i] as u32 + 587 * rgb[3 * i + 1] as u32 + 114 * rgb[3 * i + 2] as u32
+    };
     let (w2, h2) = (width / 2, height / 2);
     let mut out = Vec::with_capacity(w2 * h2);
     for y in 0..h2 {
         let (r0, r1) = (2 * y * width, (2 * y + 1) * width);
         for x in 0..w2 {
-            let sum = milli(r0 + 2 * x) + milli(r0 + 2 * x + 1) + milli(r1 + 2 * x) + milli(r1 + 2 * x + 1);
+            let sum = milli(r0 + 2 * x)
+                + milli(r0 + 2 * x + 1)
+                + milli(r1 + 2 * x)
+                + milli(r1 + 2 * x + 1);
             out.push(div_round_even(sum, 4000) as u8);
         }
     }
@@ -112,7 +117,11 @@ fn read_rgb(path: &Path, width: usize, height: usize) -> Result<Vec<u8>> {
         .decode()
         .map_err(|e| bad(e.to_string()))?;
     if (img.width() as usize, img.height() as usize) != (width, height) {
-        return Err(bad(format!("{}x{}, not {width}x{height}", img.width(), img.height())));
+        return Err(bad(format!(
+            "{}x{}, not {width}x{height}",
+            img.width(),
+            img.height()
+        )));
     }
     Ok(img.to_rgb8().into_raw())
 }
@@ -252,7 +261,10 @@ mod tests {
         // Gray pixels (R = G = B) 1, 2, 3, 4: 2.5 -> 2 (ties to even); 10, 10, 10, 11:
         // 10.25 -> 10; 3, 4, 4, 4: 3.75 -> 4.
         let g = |v: &[u8]| v.iter().flat_map(|&p| [p, p, p]).collect::<Vec<u8>>();
-        assert_eq!(half_gray(&g(&[1, 2, 10, 10, 3, 4, 10, 11]), 4, 2), vec![2, 10]);
+        assert_eq!(
+            half_gray(&g(&[1, 2, 10, 10, 3, 4, 10, 11]), 4, 2),
+            vec![2, 10]
+        );
         assert_eq!(half_gray(&g(&[3, 4, 4, 4]), 2, 2), vec![4]);
         // Colour: the unrounded gray is averaged. Pure red 255: 76.245 each.
         assert_eq!(half_gray(&[255, 0, 0].repeat(4), 2, 2), vec![76]);

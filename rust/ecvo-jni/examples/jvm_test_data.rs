@@ -95,5 +95,8 @@ fn main() {
         .expect("usage: jvm_test_data OUT_DIR");
     let frames = write_stream(&out);
     assert!(frames > 10);
-    println!("wrote {frames} frames and their expected poses to {}", out.display());
+    println!(
+        "wrote {frames} frames and their expected poses to {}",
+        out.display()
+    );
 }

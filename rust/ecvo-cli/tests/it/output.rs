@@ -26,7 +26,11 @@ fn huge_numbers_in_errors_are_printed_as_written() {
         ("\"fx\": 250.0", "\"fx\": 1e300", "1e300"),
         ("\"cx\": 159.5", "\"cx\": -1e300", "-1e300"),
         ("\"depth_scale\": 1000.0", "\"depth_scale\": 1e300", "1e300"),
-        ("\"depth_scale\": 1000.0", "\"depth_scale\": 1e-300", "1e-300"),
+        (
+            "\"depth_scale\": 1000.0",
+            "\"depth_scale\": 1e-300",
+            "1e-300",
+        ),
     ] {
         fs::write(&cam, good.replace(from, to)).unwrap();
         let e = fails(&run_seq(&seq, &out, &[]), &["camera.json", shown]);
@@ -45,7 +49,11 @@ fn huge_numbers_in_errors_are_printed_as_written() {
     for bad in [
         text.replacen(tx, "1e300", 1),
         // A timestamp of 1e300 followed by a smaller one: not increasing.
-        text.replacen(&format!("\n{}", lines[data[1]].split_whitespace().next().unwrap()), "\n1e300", 1),
+        text.replacen(
+            &format!("\n{}", lines[data[1]].split_whitespace().next().unwrap()),
+            "\n1e300",
+            1,
+        ),
     ] {
         fs::write(&gt, &bad).unwrap();
         for o in [
@@ -101,8 +109,16 @@ fn table_says_a_warning_once() {
     assert_eq!(said, 1, "{stderr}");
     // Six cells were tracked: 2 frame steps x naive, L1, L2.
     let stdout = String::from_utf8_lossy(&o.stdout);
-    assert_eq!(stdout.lines().filter(|l| l.starts_with("| 1 |")).count(), 3, "{stdout}");
-    assert_eq!(stdout.lines().filter(|l| l.starts_with("| 2 |")).count(), 3, "{stdout}");
+    assert_eq!(
+        stdout.lines().filter(|l| l.starts_with("| 1 |")).count(),
+        3,
+        "{stdout}"
+    );
+    assert_eq!(
+        stdout.lines().filter(|l| l.starts_with("| 2 |")).count(),
+        3,
+        "{stdout}"
+    );
 }
 
 /// `ecvo run --help` groups its options under headings, in this order, the most used
@@ -129,7 +145,10 @@ fn run_help_is_grouped() {
     let groups: [(&str, &[&str]); 5] = [
         ("Input:", &["--camera", "--max-frames", "--frame-step"]),
         ("Method:", &["--preset", "--mode", "--levels", "--tracking"]),
-        ("Tuning:", &["--depth-noise", "--weighting", "--no-bilateral"]),
+        (
+            "Tuning:",
+            &["--depth-noise", "--weighting", "--no-bilateral"],
+        ),
         ("Output:", &["--out", "--plot-plane"]),
         ("Limits:", &["--threads", "--max-memory"]),
     ];
@@ -143,7 +162,10 @@ fn run_help_is_grouped() {
         last = h;
         for opt in *options {
             let p = at(opt);
-            assert!(p > last && p < end, "{opt} not in order under {heading}:\n{help}");
+            assert!(
+                p > last && p < end,
+                "{opt} not in order under {heading}:\n{help}"
+            );
             last = p;
         }
     }

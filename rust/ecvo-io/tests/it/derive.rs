@@ -40,8 +40,14 @@ fn half_of_full300_is_tum_fr1_xyz_half() {
     };
     let r = derive_sequence(&full, &out, &opts).unwrap();
     assert_eq!((r.rgb, r.depth, r.width, r.height), (6, 6, 320, 240));
-    let (a, b) = (load_camera_json(out.join("camera.json")).unwrap(), load_camera_json(half.join("camera.json")).unwrap());
-    assert_eq!((a.width, a.height, a.depth_scale), (b.width, b.height, b.depth_scale));
+    let (a, b) = (
+        load_camera_json(out.join("camera.json")).unwrap(),
+        load_camera_json(half.join("camera.json")).unwrap(),
+    );
+    assert_eq!(
+        (a.width, a.height, a.depth_scale),
+        (b.width, b.height, b.depth_scale)
+    );
     for (x, y) in [(a.fx, b.fx), (a.fy, b.fy), (a.cx, b.cx), (a.cy, b.cy)] {
         assert!((x - y).abs() < 1e-9, "{a:?} against {b:?}");
     }
@@ -60,14 +66,21 @@ fn half_of_full300_is_tum_fr1_xyz_half() {
                 let off = g.iter().zip(&w).map(|(p, q)| p.abs_diff(*q)).max().unwrap();
                 assert!(off <= 1, "{file}: gray differs by {off}");
                 let same = g.iter().zip(&w).filter(|(p, q)| p == q).count();
-                assert!(same * 10 > g.len() * 6, "{file}: only {same} of {} gray values equal", g.len());
+                assert!(
+                    same * 10 > g.len() * 6,
+                    "{file}: only {same} of {} gray values equal",
+                    g.len()
+                );
             } else {
                 let (mut gd, mut wd) = (Vec::new(), Vec::new());
                 read_depth_png(out.join(&file), 320, 240, &mut gd).unwrap();
                 read_depth_png(half.join(&file), 320, 240, &mut wd).unwrap();
                 let differ = gd.iter().zip(&wd).filter(|(p, q)| p != q).count();
                 assert_eq!(differ, 0, "{file}: {differ} depth pixels differ");
-                assert!(wd.iter().filter(|&&d| d == 0).count() > 1000, "{file}: some blocks are invalid");
+                assert!(
+                    wd.iter().filter(|&&d| d == 0).count() > 1000,
+                    "{file}: some blocks are invalid"
+                );
             }
         }
     }
@@ -122,7 +135,10 @@ fn derive_a_small_folder() {
     assert_eq!((g[0], g[1], g[63]), (6, 26, 160));
     read_depth_png(out.join("depth/1.033000.png"), 8, 8, &mut d).unwrap();
     // 1007.5 -> 1008 (ties to even); 1031 is 3.1 % above 1000: invalid; a 0: invalid.
-    assert_eq!((d[0], d[1], d[2], d[8], d[9], d[63]), (1000, 1008, 1000, 0, 0, 1000));
+    assert_eq!(
+        (d[0], d[1], d[2], d[8], d[9], d[63]),
+        (1000, 1008, 1000, 0, 0, 1000)
+    );
     assert_eq!(d.iter().filter(|&&v| v == 0).count(), 2);
     let c = load_camera_json(out.join("camera.json")).unwrap();
     assert_eq!((c.width, c.height), (8, 8));
@@ -136,7 +152,10 @@ fn derive_a_small_folder() {
     };
     let r = derive_sequence(&src, &first, &opts).unwrap();
     assert_eq!((r.rgb, r.depth, r.width, r.height), (1, 1, 16, 16));
-    assert_eq!(data_lines(&first.join("depth.txt")), vec!["1.000000 depth/1.000000.png"]);
+    assert_eq!(
+        data_lines(&first.join("depth.txt")),
+        vec!["1.000000 depth/1.000000.png"]
+    );
     assert_eq!(
         fs::read(first.join("rgb/1.000000.png")).unwrap(),
         fs::read(src.join("rgb/1.000000.png")).unwrap()
