@@ -64,7 +64,7 @@ CACHE="${ANDROID_TYPES_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/ecvo/android-types
 PKG="$CACHE/node_modules/@nativescript/types-android"
 if ! grep -q "\"version\": *\"$TYPES_VERSION\"" "$PKG/package.json" 2>/dev/null; then
   command -v npm >/dev/null || die "npm is needed"
-  log "installing @nativescript/types-android@$TYPES_VERSION into $CACHE"
+  log "downloading @nativescript/types-android@$TYPES_VERSION from npm: 4.3 MB, once, into $CACHE"
   mkdir -p "$CACHE"
   npm install --prefix "$CACHE" --no-audit --no-fund --loglevel=error "@nativescript/types-android@$TYPES_VERSION" >&2
 fi

@@ -137,7 +137,7 @@ kotlin() {
   local tcache="${ANDROID_TYPES_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/ecvo/android-types}"
   local pkg="$tcache/node_modules/@nativescript/types-android"
   if ! grep -q "\"version\": *\"$TYPES_VERSION\"" "$pkg/package.json" 2>/dev/null; then
-    log "installing @nativescript/types-android@$TYPES_VERSION into $tcache"
+    log "downloading @nativescript/types-android@$TYPES_VERSION from npm: 4.3 MB, once, into $tcache"
     mkdir -p "$tcache"
     npm install --prefix "$tcache" --no-audit --no-fund --loglevel=error "@nativescript/types-android@$TYPES_VERSION" >&2
   fi
@@ -159,7 +159,7 @@ kotlin() {
   if [ -z "$KOTLINC" ]; then
     local kc="${KOTLINC_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/ecvo/kotlinc}"
     if [ ! -x "$kc/node_modules/kotlin-compiler/bin/kotlinc" ]; then
-      log "installing kotlin-compiler@2.4.20 into $kc"
+      log "downloading kotlin-compiler@2.4.20 from npm: 90 MB (94 MB installed), once, into $kc"
       mkdir -p "$kc"
       npm install --prefix "$kc" --no-audit --no-fund --loglevel=error kotlin-compiler@2.4.20 >&2
       chmod +x "$kc"/node_modules/kotlin-compiler/bin/* 2>/dev/null || true

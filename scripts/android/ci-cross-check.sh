@@ -99,11 +99,14 @@ done
 if [ $QEMU = 1 ]; then
   # The numeric tests: unit tests (among them the NEON/scalar agreement of MOTION's and
   # the preparation's kernels), MOTION and the property tests. Host only, to keep CI
-  # short: tests/basin.rs (95 s under qemu), the unit test on recorded frames (the same
+  # short: tests/it/basin.rs (95 s under qemu), the unit test on recorded frames (the same
   # agreement on real images, its 640x480 pairs the slowest part of --lib under qemu),
-  # and tests/tracker.rs and tests/threads.rs (whole streams: 13 and 4.5 minutes).
-  timed "ecvo-core tests on aarch64 (qemu-user)" "$HERE/test-core-aarch64.sh" --release \
-    --lib --test motion --test properties -- --skip poses_on_recorded_frames_match
+  # and tests/it/tracker.rs and tests/it/threads.rs (whole streams: 13 and 4.5 minutes).
+  # (The integration tests are one binary, tests/it: its modules motion and properties.)
+  timed "ecvo-core unit tests on aarch64 (qemu-user)" "$HERE/test-core-aarch64.sh" --release \
+    --lib -- --skip poses_on_recorded_frames_match
+  timed "ecvo-core MOTION and property tests on aarch64 (qemu-user)" "$HERE/test-core-aarch64.sh" \
+    --release --test it -- motion:: properties::
 else
   warn "*** ecvo-core's aarch64 tests NOT run (--skip-qemu-tests) ***"
 fi

@@ -64,7 +64,7 @@ else
   PKG="$CACHE/node_modules/kotlin-compiler"
   if ! grep -q "\"version\": *\"$KOTLIN_VERSION\"" "$PKG/package.json" 2>/dev/null || [ ! -x "$PKG/bin/kotlinc" ]; then
     command -v npm >/dev/null || die "npm is needed to install kotlinc"
-    log "installing kotlin-compiler@$KOTLIN_VERSION into $CACHE"
+    log "downloading kotlin-compiler@$KOTLIN_VERSION from npm: 90 MB (94 MB installed), once, into $CACHE"
     mkdir -p "$CACHE"
     npm install --prefix "$CACHE" --no-audit --no-fund --loglevel=error "kotlin-compiler@$KOTLIN_VERSION" >&2
     chmod +x "$PKG"/bin/* 2>/dev/null || true

@@ -10,6 +10,22 @@
 // estimations [A], [B], [C] as the paper does: not links.
 #![allow(rustdoc::broken_intra_doc_links)]
 
+/// `print!` for the command's results: a closed stdout (`ecvo eval GT EST | head -1`)
+/// ends the process quietly with status 0, as in every Unix tool, instead of the
+/// standard macro's panic; another write error is an error message and status 1.
+macro_rules! out {
+    ($($arg:tt)*) => {
+        $crate::write_stdout(format_args!($($arg)*))
+    };
+}
+
+/// `println!` through [`out!`].
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        $crate::write_stdout(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
 mod engine;
 mod outputs;
 mod plot;
@@ -34,7 +50,7 @@ use crate::plot::Plane;
 use crate::run::{Evaluation, RunOutputs};
 use crate::settings::TrackSettings;
 use crate::synth::{Motion, Noise, Size};
-use crate::track_args::{ModeArg, PresetArg, TrackArgs};
+use crate::track_args::{LimitArgs, ModeArg, PresetArg, TrackArgs};
 
 #[derive(Parser)]
 #[command(
@@ -53,6 +69,19 @@ struct Cli {
     /// skipped or lost).
     #[arg(short, long, global = true, conflicts_with = "verbose")]
     quiet: bool,
+}
+
+/// Writes `args` to stdout and flushes it; see [`out!`].
+fn write_stdout(args: std::fmt::Arguments<'_>) {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    if let Err(e) = stdout.write_fmt(args).and_then(|()| stdout.flush()) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("error: writing to stdout: {e}");
+        std::process::exit(1);
+    }
 }
 
 /// Set by `-q`.
@@ -113,7 +142,57 @@ fn init_logger(verbose: u8, quiet: bool) {
         writeln!(buf, "{prefix}{}", printable(&record.args().to_string()))
     });
     builder.target(env_logger::Target::Stderr);
-    let _ = builder.try_init();
+    let logger = builder.build();
+    log::set_max_level(logger.filter());
+    let _ = log::set_boxed_logger(Box::new(SayOnce {
+        inner: logger,
+        said: std::sync::Mutex::new(std::collections::HashSet::new()),
+    }));
+}
+
+/// The logger around env_logger that says each warning once: `ecvo table` opens a
+/// sequence once per cell, and its reader's warnings (list entries without a partner)
+/// are the same every time.
+struct SayOnce {
+    inner: env_logger::Logger,
+    /// Hashes of the warnings said so far; at most [`SayOnce::MAX_REMEMBERED`].
+    said: std::sync::Mutex<std::collections::HashSet<u64>>,
+}
+
+impl SayOnce {
+    /// Beyond this many different warnings, new ones are all said (the memory stays
+    /// bounded whatever the input).
+    const MAX_REMEMBERED: usize = 4096;
+}
+
+impl log::Log for SayOnce {
+    fn enabled(&self, metadata: &log::Metadata<'_>) -> bool {
+        self.inner.enabled(metadata)
+    }
+
+    fn log(&self, record: &log::Record<'_>) {
+        if !self.inner.matches(record) {
+            return;
+        }
+        if record.level() == log::Level::Warn {
+            use std::hash::{Hash, Hasher};
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            record.args().to_string().hash(&mut h);
+            let key = h.finish();
+            let mut said = self.said.lock().unwrap_or_else(|e| e.into_inner());
+            if said.contains(&key) {
+                return;
+            }
+            if said.len() < Self::MAX_REMEMBERED {
+                said.insert(key);
+            }
+        }
+        self.inner.log(record);
+    }
+
+    fn flush(&self) {
+        self.inner.flush();
+    }
 }
 
 #[derive(Subcommand)]
@@ -128,34 +207,46 @@ enum Command {
         #[command(flatten)]
         track: TrackArgs,
         /// Which error-correction levels run.
-        #[arg(long, value_enum, default_value_t = ModeArg::L2)]
+        #[arg(help_heading = "Method", display_order = 11, long, value_enum, default_value_t = ModeArg::L2)]
         mode: ModeArg,
         /// Reference levels overriding the preset's, e.g. "30mm:7deg,120mm:12deg".
-        #[arg(long, allow_hyphen_values = true)]
+        #[arg(
+            help_heading = "Method",
+            display_order = 12,
+            long,
+            allow_hyphen_values = true
+        )]
         levels: Option<String>,
         /// Switch the bilateral depth filter off. With the phone preset keep the
         /// contour filter off too (--no-contour-filter): at its 20° it reads raw depth
         /// noise as depth edges and removes nearly every pixel.
-        #[arg(long)]
+        #[arg(help_heading = "Tuning", display_order = 34, long)]
         no_bilateral: bool,
         /// Switch the normal-based removal filter off.
-        #[arg(long)]
+        #[arg(help_heading = "Tuning", display_order = 35, long)]
         no_normal_filter: bool,
         /// Switch the contour-based removal filter off.
-        #[arg(long)]
+        #[arg(help_heading = "Tuning", display_order = 36, long)]
         no_contour_filter: bool,
         /// Output folder (created if needed; files in it are overwritten).
-        #[arg(long)]
+        #[arg(help_heading = "Output", display_order = 40, long)]
         out: PathBuf,
         /// Point cloud: take every Nth pixel in each direction.
-        #[arg(long, default_value_t = 4)]
+        #[arg(help_heading = "Output", display_order = 42, long, default_value_t = 4)]
         cloud_stride: usize,
         /// Point cloud with --mode naive: take every Nth frame.
-        #[arg(long, default_value_t = 15)]
+        #[arg(
+            help_heading = "Output",
+            display_order = 43,
+            long,
+            default_value_t = 15
+        )]
         cloud_every: usize,
         /// Plane of the top view in trajectory.svg.
-        #[arg(long, value_enum, default_value_t = Plane::Xz)]
+        #[arg(help_heading = "Output", display_order = 41, long, value_enum, default_value_t = Plane::Xz)]
         plot_plane: Plane,
+        #[command(flatten)]
+        limits: LimitArgs,
     },
     /// ATE and RPE of an estimated TUM trajectory against a ground-truth one.
     Eval {
@@ -176,11 +267,13 @@ enum Command {
         track: TrackArgs,
         /// Frame steps to run each sequence at, e.g. 1,2,3,4 (overrides --frame-step;
         /// each 1 to 1000).
-        #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=1000))]
+        #[arg(help_heading = "Input", display_order = 3, long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=1000))]
         frame_steps: Vec<u32>,
         /// Also write every row as JSON lines to this file.
-        #[arg(long)]
+        #[arg(help_heading = "Output", display_order = 40, long)]
         json: Option<PathBuf>,
+        #[command(flatten)]
+        limits: LimitArgs,
     },
     /// Render a synthetic stream with exact ground truth: a 320x180 phone-like camera
     /// by default, or the TUM Kinect's 640x480 one (--size).
@@ -271,6 +364,7 @@ fn dispatch(command: Command) -> Result<()> {
             cloud_stride,
             cloud_every,
             plot_plane,
+            limits,
         } => {
             let mode = match mode {
                 ModeArg::Naive => Mode::Naive,
@@ -289,7 +383,7 @@ fn dispatch(command: Command) -> Result<()> {
                 bilateral: !no_bilateral,
                 normal_filter: !no_normal_filter,
                 contour_filter: !no_contour_filter,
-                ..track.settings(mode)
+                ..track.settings(mode, &limits)
             };
             let outs = RunOutputs {
                 out,
@@ -305,13 +399,19 @@ fn dispatch(command: Command) -> Result<()> {
             track,
             frame_steps,
             json,
+            limits,
         } => {
             let steps: Vec<usize> = if frame_steps.is_empty() {
                 vec![track.frame_step as usize]
             } else {
                 frame_steps.iter().map(|&s| s as usize).collect()
             };
-            table::table_command(&seqs, &track.settings(Mode::L2), &steps, json.as_deref())
+            table::table_command(
+                &seqs,
+                &track.settings(Mode::L2, &limits),
+                &steps,
+                json.as_deref(),
+            )
         }
         Command::Synth {
             out,
@@ -367,25 +467,33 @@ fn eval_command(gt_path: &Path, est_path: &Path, as_json: bool) -> Result<()> {
             "ate": eval.ate_json(),
             "rpe": eval.rpe_json(),
         });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?);
     } else {
-        println!(
+        outln!(
             "ATE RMSE (absolute trajectory error after rigid alignment): {:.4} m (mean {:.4}, median {:.4}, max {:.4}); {} poses",
-            a.rmse, a.mean, a.median, a.max, a.count
+            a.rmse,
+            a.mean,
+            a.median,
+            a.max,
+            a.count
         );
         match &eval.rpe_s {
-            Some(r) => println!(
+            Some(r) => outln!(
                 "RPE over 1 s (drift), RMSE: {:.4} m/s, {:.3} deg/s; {} pairs",
-                r.trans.rmse, r.rot_deg.rmse, r.trans.count
+                r.trans.rmse,
+                r.rot_deg.rmse,
+                r.trans.count
             ),
-            None => println!("RPE over 1 s: n/a (no pair of poses 1 s apart could be scored)"),
+            None => outln!("RPE over 1 s: n/a (no pair of poses 1 s apart could be scored)"),
         }
         match &eval.rpe_frame {
-            Some(r) => println!(
+            Some(r) => outln!(
                 "RPE per frame (consecutive poses), RMSE: {:.5} m, {:.4} deg; {} pairs",
-                r.trans.rmse, r.rot_deg.rmse, r.trans.count
+                r.trans.rmse,
+                r.rot_deg.rmse,
+                r.trans.count
             ),
-            None => println!("RPE per frame: n/a (no consecutive poses could be scored)"),
+            None => outln!("RPE per frame: n/a (no consecutive poses could be scored)"),
         }
     }
     Ok(())

@@ -90,7 +90,7 @@ pub(crate) fn summary_json(
     summary["refinements"] = json!(c.refinements);
     summary["refused_refinements"] = json!(c.refused_refinements);
     summary["noise_refits"] = json!(c.noise_refits);
-    summary["depth_noise_in_use"] = json!(format!("{:?}", t.run.stats.depth_noise));
+    summary["depth_noise_in_use"] = depth_noise_json(t.run.stats.depth_noise);
     summary["frames_account"] = account(t, settings).1;
     // `ground_truth` means an ATE was computed; these say whether the sequence had a
     // ground-truth file and, if no ATE, why.
@@ -319,4 +319,51 @@ pub(crate) fn write_cloud(path: &Path, t: &Tracked) -> Result<usize> {
     }
     ecvo_io::write_ply(path, &points, Some(&normals), Some(&intensity))?;
     Ok(points.len())
+}
+
+/// `depth_noise_in_use` in `summary.json`: the depth-noise model as a name and its
+/// parameters, `{"model": "quadratic"}`, `{"model": "constant"}` or
+/// `{"model": "mixed", "half_log2_alpha": 2, "alpha": 2.0}` (σ_Z(z)² ∝ α + z⁴ with
+/// α = 2^(half_log2_alpha / 2)); `{"model": "fitted"}` only before a first fit.
+pub(crate) fn depth_noise_json(model: ecvo_core::DepthNoiseModel) -> serde_json::Value {
+    use ecvo_core::DepthNoiseModel as M;
+    match model {
+        M::Constant => json!({ "model": "constant" }),
+        M::Quadratic => json!({ "model": "quadratic" }),
+        M::Fitted => json!({ "model": "fitted" }),
+        M::Mixed { half_log2_alpha } => json!({
+            "model": "mixed",
+            "half_log2_alpha": half_log2_alpha,
+            "alpha": (f64::from(half_log2_alpha) / 2.0).exp2(),
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::depth_noise_json;
+    use ecvo_core::DepthNoiseModel;
+    use serde_json::json;
+
+    #[test]
+    fn depth_noise_is_a_name_and_its_parameters() {
+        assert_eq!(
+            depth_noise_json(DepthNoiseModel::Mixed { half_log2_alpha: 2 }),
+            json!({"model": "mixed", "half_log2_alpha": 2, "alpha": 2.0})
+        );
+        assert_eq!(
+            depth_noise_json(DepthNoiseModel::Mixed {
+                half_log2_alpha: -7
+            })["alpha"],
+            json!(2f64.powf(-3.5))
+        );
+        assert_eq!(
+            depth_noise_json(DepthNoiseModel::Quadratic),
+            json!({"model": "quadratic"})
+        );
+        assert_eq!(
+            depth_noise_json(DepthNoiseModel::Constant),
+            json!({"model": "constant"})
+        );
+    }
 }

@@ -262,7 +262,7 @@ pub fn run_command(seq: &Path, settings: &TrackSettings, outs: &RunOutputs) -> R
     std::fs::write(&summary_path, text)
         .with_context(|| format!("writing {}", summary_path.display()))?;
 
-    print!("{}", human_summary(seq, &t, &stages, out));
+    out!("{}", human_summary(seq, &t, &stages, out));
     Ok(())
 }
 

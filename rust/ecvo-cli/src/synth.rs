@@ -209,7 +209,7 @@ pub fn synth_command(
     }
     writer.write_groundtruth(&gt)?;
     let n = writer.finish()?;
-    println!(
+    outln!(
         "wrote {n} frames ({}x{}, depth in 1/{} m, noise {noise:?}, motion {:?}, seed {seed}) to {}",
         camera.width,
         camera.height,

@@ -103,7 +103,7 @@ pub fn table_command(
         for r in rows {
             let _ = writeln!(out, "{r}");
         }
-        print!("{out}");
+        out!("{out}");
     }
     Ok(())
 }

@@ -2,6 +2,7 @@
 //! sequence without inflating it. Alone in its test binary, so that the children's
 //! peak RSS that `getrusage` reports is this run's.
 
+#[path = "it/common/mod.rs"]
 mod common;
 
 use std::fs;

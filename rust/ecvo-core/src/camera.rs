@@ -1,6 +1,7 @@
 //! Pinhole intrinsics and depth units of an RGB-D stream.
 
 use crate::error::{Error, Result};
+use crate::num::Num;
 
 /// The smallest image side [`Camera::validate`] accepts, in pixels. The pyramid
 /// schedules use fewer levels on small images ([`crate::Schedule::levels_for`]), so
@@ -104,15 +105,19 @@ impl Camera {
             if !v.is_finite() || v == 0.0 {
                 return bad(
                     field,
-                    format!("focal length must be finite and non-zero, got {v}"),
+                    format!("focal length must be finite and non-zero, got {}", Num(v)),
                 );
             }
             if !(lo..=hi).contains(&v.abs()) {
                 return bad(
                     field,
                     format!(
-                        "focal length {v} px is implausible for a {}x{} image: |{field}| must be in [{lo}, {hi}] ({MIN_FOCAL_PER_SIDE} to {MAX_FOCAL_PER_SIDE} times the larger side)",
-                        self.width, self.height
+                        "focal length {} px is implausible for a {}x{} image: |{field}| must be in [{}, {}] ({MIN_FOCAL_PER_SIDE} to {MAX_FOCAL_PER_SIDE} times the larger side)",
+                        Num(v),
+                        self.width,
+                        self.height,
+                        Num(lo),
+                        Num(hi)
                     ),
                 );
             }
@@ -122,7 +127,7 @@ impl Camera {
                 "fx",
                 format!(
                     "{} is negative: it would mirror the motion along x; flip the image instead",
-                    self.fx
+                    Num(self.fx)
                 ),
             );
         }
@@ -133,8 +138,12 @@ impl Camera {
                 return bad(
                     field,
                     format!(
-                        "principal point {v} is outside the {}x{} image (allowed [{lo}, {hi}])",
-                        self.width, self.height
+                        "principal point {} is outside the {}x{} image (allowed [{}, {}])",
+                        Num(v),
+                        self.width,
+                        self.height,
+                        Num(lo),
+                        Num(hi)
                     ),
                 );
             }
@@ -144,7 +153,7 @@ impl Camera {
                 "depth_scale",
                 format!(
                     "{} raw units per metre is not in [{MIN_DEPTH_SCALE}, {MAX_DEPTH_SCALE}] (1000 for millimetres, 5000 for TUM)",
-                    self.depth_scale
+                    Num(self.depth_scale)
                 ),
             );
         }

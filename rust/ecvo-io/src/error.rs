@@ -33,9 +33,11 @@ pub enum Error {
     },
     /// Timestamps of a list or trajectory file are not strictly increasing.
     #[error(
-        "{}:{line}: timestamp {timestamp} is not after the previous one ({previous}); \
+        "{}:{line}: timestamp {} is not after the previous one ({}); \
          timestamps must be strictly increasing",
-        shown_path(path)
+        shown_path(path),
+        ecvo_core::Num(*timestamp),
+        ecvo_core::Num(*previous)
     )]
     NonMonotonic {
         /// The text file.

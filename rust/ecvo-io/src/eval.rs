@@ -2,7 +2,7 @@
 //! association, absolute trajectory error after a rigid alignment, and relative pose
 //! error.
 
-use ecvo_core::Pose;
+use ecvo_core::{Num, Pose};
 use nalgebra::{Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 
 use crate::error::{Error, Result};
@@ -79,7 +79,8 @@ fn check_finite(what: &str, s: &ErrorStats) -> Result<()> {
     Err(Error::InvalidInput(format!(
         "{what} cannot be scored: its statistics overflow (RMSE {}, max {}); the \
          trajectories' values are too large",
-        s.rmse, s.max
+        Num(s.rmse),
+        Num(s.max)
     )))
 }
 

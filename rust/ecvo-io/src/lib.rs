@@ -20,6 +20,7 @@
 
 pub mod camera;
 pub mod datasets;
+pub mod derive;
 pub mod error;
 pub mod eval;
 pub mod files;

@@ -5,7 +5,7 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
-use ecvo_core::Pose;
+use ecvo_core::{Num, Pose};
 use nalgebra::{Quaternion, Translation3, UnitQuaternion};
 
 use crate::error::{Error, Result};
@@ -92,7 +92,8 @@ impl Trajectory {
                         r.line,
                         format!(
                             "{} {} is out of range (at most {MAX_COORDINATE_M:e} m from the origin)",
-                            NAMES[k], v[k]
+                            NAMES[k],
+                            Num(v[k])
                         ),
                     ));
                 }
@@ -161,8 +162,9 @@ impl Trajectory {
                 && q.coords.iter().all(|v| v.is_finite());
             if !finite {
                 return Err(Error::InvalidInput(format!(
-                    "{}: pose {i} (timestamp {t}) has a non-finite value",
-                    path.display()
+                    "{}: pose {i} (timestamp {}) has a non-finite value",
+                    path.display(),
+                    Num(t)
                 )));
             }
         }

@@ -93,7 +93,7 @@ impl InitArgs {
                 if !(lo..=hi).contains(&self.depth_scale) {
                     return Err(bad(format!(
                         "depthScale: {} units per metre is not in [{lo}, {hi}] (1000 for millimetres)",
-                        self.depth_scale
+                        ecvo_core::Num(self.depth_scale)
                     )));
                 }
                 self.depth_scale
@@ -135,7 +135,7 @@ impl InitArgs {
             ("cy", self.cy),
         ] {
             if !v.is_finite() {
-                return Err(bad(format!("{name}: {v} is not finite")));
+                return Err(bad(format!("{name}: {} is not finite", ecvo_core::Num(v))));
             }
         }
         let camera = Camera {
@@ -251,6 +251,20 @@ mod tests {
             })
             .contains("depthScale")
         );
+        // Numbers as written or with an exponent, never a 300-digit decimal.
+        let m = msg(InitArgs {
+            depth_format: 2,
+            depth_scale: 1e300,
+            ..good.clone()
+        });
+        assert!(m.starts_with("depthScale: 1e300 units per metre"), "{m}");
+        assert!(m.len() < 120, "{} characters: {m}", m.len());
+        let m = msg(InitArgs {
+            fx: 1e300,
+            ..good.clone()
+        });
+        assert!(m.contains("focal length 1e300 px"), "{m}");
+        assert!(m.len() < 200, "{} characters: {m}", m.len());
         assert!(
             msg(InitArgs {
                 depth_format: 1,

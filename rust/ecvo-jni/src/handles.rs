@@ -46,7 +46,13 @@ pub fn flush(handle: jlong) -> Result<(), Failure> {
 /// `nativeRelease` (the Kotlin `Tracker.close` and its `Cleaner` both end here).
 pub fn release(handle: jlong) {
     let removed = lock(&REGISTRY).remove(&handle);
+    let released = removed
+        .as_ref()
+        .is_some_and(|t| std::sync::Arc::strong_count(t) == 1);
     drop(removed);
+    if released {
+        crate::tracker::give_back_memory();
+    }
 }
 
 /// Trackers in the registry.

@@ -12,7 +12,7 @@
 //! time that each Rust implementation matches the JNI signature written next to it,
 //! and exports it under its short JNI name (`Java_io_ecvo_NativeBridge_nativeInit`,
 //! ...), which is what `scripts/android/check-so.sh` looks for. [`declared_signatures`]
-//! lists the same names and signatures, and `tests/signatures.rs` compares them with
+//! lists the same names and signatures, and `tests/it/signatures.rs` compares them with
 //! the declarations parsed from `NativeBridge.kt`, so Kotlin and Rust cannot drift
 //! apart silently.
 //!

@@ -33,7 +33,7 @@ macro_rules! bridge {
         pub const NATIVE_METHODS: &[NativeMethod<'static>] = &[$($konst),*];
 
         /// `(exported symbol, JNI signature)` of every native method, from the same
-        /// declarations as [`NATIVE_METHODS`]; `tests/signatures.rs` compares them with
+        /// declarations as [`NATIVE_METHODS`]; `tests/it/signatures.rs` compares them with
         /// `NativeBridge.kt`.
         pub fn declared_signatures() -> Vec<(&'static str, String)> {
             vec![$(
@@ -516,7 +516,13 @@ fn native_release<'local>(
         }
         // The pipeline stops and joins its threads when the last `Arc` goes: here,
         // or at the end of a call still running on another thread.
+        let released = removed
+            .as_ref()
+            .is_some_and(|t| std::sync::Arc::strong_count(t) == 1);
         drop(removed);
+        if released {
+            crate::tracker::give_back_memory();
+        }
         Ok(())
     })
 }

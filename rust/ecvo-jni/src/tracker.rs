@@ -132,3 +132,22 @@ impl NativeTracker {
             .map_or_else(|| (seconds * 1e9).round() as jlong, |(_, ns)| *ns)
     }
 }
+
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+unsafe extern "C" {
+    /// glibc: returns free memory of every malloc arena to the system.
+    fn malloc_trim(pad: usize) -> i32;
+}
+
+/// After a tracker's release: hands the memory its threads freed back to the system.
+/// glibc keeps freed memory in its arenas (the main heap and one per thread that
+/// allocated), so without this the RSS after each round of "10 trackers, one frame each,
+/// released" grew from 20 MB to 705 MB over 30 rounds (`--example rounds`); with it,
+/// from 9 to 51 MB. Other C libraries (Android's bionic) manage their own.
+pub(crate) fn give_back_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: malloc_trim only walks glibc's own arenas; it is thread-safe.
+    unsafe {
+        malloc_trim(0);
+    }
+}

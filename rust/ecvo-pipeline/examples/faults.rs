@@ -1,9 +1,9 @@
 //! Prints the fault-injection table of the README: every fault of
-//! `tests/faults/mod.rs` through the sequential engine and the pipeline.
+//! `tests/it/faults/mod.rs` through the sequential engine and the pipeline.
 //!
 //! `cargo run --release -p ecvo-pipeline --example faults`
 
-#[path = "../tests/faults/mod.rs"]
+#[path = "../tests/it/faults/mod.rs"]
 mod faults;
 
 use faults::{Engine, Fault, measure, table};

@@ -18,6 +18,7 @@
 //! trajectory and outputs channel (off here; they grow or queue per frame by
 //! design), and `stats()` snapshots (they copy the counters).
 
+#[path = "it/common/mod.rs"]
 mod common;
 
 use std::alloc::{GlobalAlloc, Layout, System};

@@ -5,6 +5,7 @@
 //! megabytes under glibc (its per-thread arenas and its dynamic mmap threshold keep
 //! freed pages); this test shows that nothing is leaked by ecvo itself.
 
+#[path = "it/common/mod.rs"]
 mod common;
 
 use std::alloc::{GlobalAlloc, Layout, System};

@@ -5,6 +5,7 @@
 //! is refused before it allocates, with the need and the budget; and once it is
 //! finished or dropped the bytes outstanding are back at the baseline.
 
+#[path = "it/common/mod.rs"]
 mod common;
 
 use std::sync::Mutex;

@@ -34,7 +34,7 @@ pub const ORBIT_DEPTH_RANGE_M: (f64, f64) = (1.0, 4.5);
 /// centre looking outward, the furniture stands in front of some walls and the view
 /// of an octagon's corner reaches further, the floor and ceiling nearer;
 /// `1.03 depth + ORBIT_RADIUS_M + 0.1` puts the mean depth of the rendered frames
-/// within a few per cent of `depth` at 320x180 and 640x480 (`tests/orbit.rs`).
+/// within a few per cent of `depth` at 320x180 and 640x480 (`tests/it/orbit.rs`).
 pub fn hall_apothem(depth: f64) -> f64 {
     1.03 * depth + ORBIT_RADIUS_M + 0.1
 }

@@ -6,7 +6,7 @@ import java.nio.ByteBuffer;
  * A Java twin of android-app's Kotlin {@code io.ecvo.NativeBridge} (same class name,
  * same static native methods, hence the same JNI symbols) for the soak and stress
  * drivers, which run on a bare JVM without kotlinc. The signatures are checked
- * against the Rust declarations by {@code tests/signatures.rs} (JNI binds the short
+ * against the Rust declarations by {@code tests/it/signatures.rs} (JNI binds the short
  * names, which carry no signature: a missing parameter would be read as garbage).
  */
 public final class NativeBridge {

@@ -8,7 +8,7 @@ import org.junit.Test
 /**
  * A process holds at most 16 live trackers (`ecvo_jni::MAX_LIVE_TRACKERS`: each has its
  * own threads); the 17th `init` is an IllegalStateException saying so, and `close()`
- * gives the place back. Run with -Xcheck:jni by `rust/ecvo-jni/tests/jvm.rs`.
+ * gives the place back. Run with -Xcheck:jni by `scripts/jni-jvm-tests.sh`.
  */
 class TrackerLimitTest {
     private fun small() = TrackerConfig(
@@ -43,5 +43,19 @@ class TrackerLimitTest {
         // All places are back.
         val again = (0 until capacity).map { Tracker(small()) }
         again.forEach { it.close() }
+    }
+
+    /**
+     * Trackers dropped without close(): at the cap a new Tracker asks for a collection and
+     * releases the unreachable ones (as java.nio does for direct memory), so 2,000 of them
+     * in a loop all open.
+     */
+    @Test fun trackersDroppedWithoutCloseDoNotExhaustTheCap() {
+        for (i in 0 until 2000) {
+            val t = Tracker(small())
+            if (i % 100 == 0) {
+                assertEquals(PushStatus.ACCEPTED, t.pushFrame(1, ShortArray(64 * 48) { 1000 }, ByteArray(64 * 48) { 7 }))
+            }
+        }
     }
 }

@@ -65,6 +65,8 @@ interface PoseTracker : AutoCloseable {
  *
  * Call [close] (or `use`) when done. A tracker that becomes unreachable without [close]
  * is released by a safety net, a phantom-reference queue drained on a daemon thread
+ * (and at the 16-tracker cap, where a new Tracker asks for a garbage collection and
+ * drains the queue before it refuses)
  * (`java.lang.ref.Cleaner` would need API 33; the app's minSdk is 26), which logs a
  * warning: that is a leak in the caller to fix, not a way to release trackers (the
  * native threads run until the garbage collector happens to notice).
@@ -98,12 +100,7 @@ class Tracker(val config: TrackerConfig) : PoseTracker {
     private val cleanable: NativeReaper.Cleanable
 
     init {
-        val h = NativeBridge.nativeInit(
-            config.width, config.height,
-            config.fx, config.fy, config.cx, config.cy,
-            config.depthFormat.code, config.depthScale, config.minConfidence,
-            config.preset.code, config.mode.code, config.admission.live, config.threads, config.pointCloud,
-        )
+        val h = initNative(config)
         check(h != 0L) { "native tracker returned a null handle" }
         handle = Handle(h)
         cleanable = REAPER.register(this, handle)
@@ -227,6 +224,44 @@ class Tracker(val config: TrackerConfig) : PoseTracker {
 
         private val LOG: Logger = Logger.getLogger("io.ecvo.Tracker")
         private val REAPER = NativeReaper("ecvo-tracker-reaper")
+
+        /** The words of the native refusal at the live-tracker cap (`ecvo_jni::limits`). */
+        private const val AT_CAP = "trackers are live"
+
+        /** Collections asked for at the cap before refusing (pauses 1, 2, 4, ... ms: 255 ms in all). */
+        private const val CAP_RETRIES = 8
+
+        /**
+         * `nativeInit`. At the live-tracker cap, what `java.nio` does for direct memory:
+         * ask for a garbage collection, release the trackers it found unreachable (the
+         * reaper's queue, drained here), and retry with growing pauses; only then refuse.
+         * A Tracker dropped without [close] then does not hold its place until a
+         * collection that may never come (the JVM does not see native memory).
+         */
+        private fun initNative(config: TrackerConfig): Long {
+            var pauseMs = 1L
+            var attempt = 0
+            while (true) {
+                try {
+                    return NativeBridge.nativeInit(
+                        config.width, config.height,
+                        config.fx, config.fy, config.cx, config.cy,
+                        config.depthFormat.code, config.depthScale, config.minConfidence,
+                        config.preset.code, config.mode.code, config.admission.live, config.threads, config.pointCloud,
+                    )
+                } catch (e: IllegalStateException) {
+                    if (attempt == CAP_RETRIES || e.message?.contains(AT_CAP) != true) throw e
+                }
+                REAPER.drain()
+                System.gc()
+                if (attempt > 0) {
+                    Thread.sleep(pauseMs)
+                    pauseMs *= 2
+                }
+                REAPER.drain()
+                attempt++
+            }
+        }
 
         /**
          * Whether [e] is the native side refusing a frame for its timestamp (not after the

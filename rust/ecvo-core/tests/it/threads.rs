@@ -1,7 +1,7 @@
 //! ecvo-core's parallel loops (MOTION's chunks, the filter's rows) give the same
 //! poses, bit for bit, whatever the number of threads of the rayon pool they run in.
 
-mod common;
+use crate::common;
 
 use ecvo_core::motion::{CHUNK, MIN_CHUNKS_PER_TASK};
 use ecvo_core::{Config, FrameOutput, Mode, Odometry, ReferenceLevel};

@@ -2,7 +2,7 @@
 //! `SynthSequence::orbit_320x180`, millimetre depth at both sizes, and `ecvo run`
 //! tracks it.
 
-mod common;
+use crate::common;
 
 use common::{data_lines, run_ok, summary, temp_dir};
 use ecvo_synth::SynthSequence;

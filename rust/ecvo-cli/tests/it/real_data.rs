@@ -1,7 +1,7 @@
 //! `ecvo run` on recorded TUM RGB-D streams from the shared datasets (skipped with
 //! SKIPPING when absent; a failure when `ECVO_REQUIRE_DATASETS=1`).
 
-mod common;
+use crate::common;
 
 use common::{check_counters, data_lines, run_ok, summary, temp_dir};
 

@@ -1,7 +1,7 @@
 //! Keyframe tracking (`Config::keyframes`, issue 26): every frame registered against
 //! the level-1 reference instead of the previous frame.
 
-mod common;
+use crate::common;
 
 use common::*;
 use ecvo_core::{Config, Error, Mode, Odometry};
@@ -52,7 +52,7 @@ fn keyframe_tracking_follows_the_ground_truth_with_fewer_motion_calls() {
         chain_rmse * 1e3,
         chain.motion_estimations
     );
-    // The chain's bound in tests/tracker.rs (measured 0.5 mm there).
+    // The chain's bound in tests/it/tracker.rs (measured 0.5 mm there).
     assert!(rmse < 0.003, "drift RMSE {:.2} mm", rmse * 1e3);
 }
 

@@ -5,7 +5,7 @@
 //! the full-resolution image, so it converges only over a pixel or two of flow; the
 //! pyramid schedules start at 1/8 resolution and reach much further.
 
-mod common;
+use crate::common;
 
 use common::*;
 use ecvo_core::motion::MotionEstimator;

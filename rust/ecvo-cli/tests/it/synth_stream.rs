@@ -1,7 +1,7 @@
 //! `ecvo run` on the synthetic stream in `testdata/` (60 frames, 320x180, phone-like
 //! noise, exact ground truth), and the files it writes.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

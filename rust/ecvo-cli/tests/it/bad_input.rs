@@ -1,7 +1,7 @@
 //! Bad input through the binary: every error is one clear message naming the file
 //! (and line), with a non-zero exit status and no panic.
 
-mod common;
+use crate::common;
 
 use std::fs;
 

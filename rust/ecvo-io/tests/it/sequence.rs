@@ -1,7 +1,7 @@
 //! Sequences: the shared TUM datasets, synthetic ICL-NUIM folders, streaming, the
 //! writer round trip, and bad inputs.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

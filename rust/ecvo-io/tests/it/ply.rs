@@ -1,6 +1,6 @@
 //! PLY output: header and binary body.
 
-mod common;
+use crate::common;
 
 use common::TempDir;
 use ecvo_io::write_ply;

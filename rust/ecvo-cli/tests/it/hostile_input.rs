@@ -2,7 +2,7 @@
 //! outside the sequence folder, nothing skipped or lost in silence, no NaN or inf in
 //! the output. Every check runs under a deadline (`run_within`).
 
-mod common;
+use crate::common;
 
 use std::fs;
 use std::path::Path;

@@ -1,6 +1,6 @@
 //! The adaptive error-correcting tracker on synthetic streams.
 
-mod common;
+use crate::common;
 
 use common::*;
 use ecvo_core::config::ReferenceLevel;

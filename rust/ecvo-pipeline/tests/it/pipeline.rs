@@ -1,7 +1,7 @@
 //! The pipeline against the sequential engine, its frame pool, its concurrent
 //! read-outs and its real-data behaviour.
 
-mod common;
+use crate::common;
 
 use std::collections::HashSet;
 use std::sync::OnceLock;

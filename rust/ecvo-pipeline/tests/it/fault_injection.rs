@@ -1,10 +1,10 @@
 //! Fault injection on the tracker through the sequential engine and the pipeline
-//! (see `tests/faults/mod.rs`; `--example faults` prints the table). The bounds are
+//! (see `tests/it/faults/mod.rs`; `--example faults` prints the table). The bounds are
 //! the measured behaviour of the tracker, so that a regression fails; where the
 //! issue's goal (every fault flagged on its first frame) is not met yet, the test
 //! says so and bounds what is measured.
 
-mod faults;
+use crate::faults;
 
 use faults::{Engine, Fault, LEN, Report, report, run, stream};
 

@@ -2,7 +2,7 @@
 //! known) with a fault in frames `START..START + LEN`, run through the sequential
 //! engine (`Odometry`) and through the pipeline (offline), frame by frame.
 //!
-//! Shared by `tests/fault_injection.rs` (which asserts on the results) and
+//! Shared by `tests/it/fault_injection.rs` (which asserts on the results) and
 //! `examples/faults.rs` (which prints the table of the README):
 //! `cargo run --release -p ecvo-pipeline --example faults`.
 

@@ -1,6 +1,6 @@
 //! MOTION on synthetic frames rendered from a known textured scene under a known motion.
 
-mod common;
+use crate::common;
 
 use common::*;
 use ecvo_core::motion::{Failure, MotionEstimator, Status};
