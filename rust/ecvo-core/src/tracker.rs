@@ -546,7 +546,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             return;
         };
         let age = index - reference.index;
-        if every == 0 || age < 2 || age % every != 0 {
+        if every == 0 || age < 2 || !age.is_multiple_of(every) {
             return;
         }
         let accumulated = se3::compose(&reference.pose.inverse(), pose);

@@ -131,7 +131,8 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         }
         let new_keyframe = far || thin || fell_back || !believed;
         let every = u64::from(self.config.keyframe_fuse_every);
-        let periodic = keyframe.is_some_and(|k| every > 0 && (index - k.index) % every == 0);
+        let periodic =
+            keyframe.is_some_and(|k| every > 0 && (index - k.index).is_multiple_of(every));
         let mut posterior = None;
         if (new_keyframe || periodic)
             && believed

@@ -7,6 +7,7 @@
 
 mod basin;
 mod common;
+mod frame_quality;
 mod keyframes;
 mod motion;
 mod properties;

@@ -1,9 +1,7 @@
 //! What each frame's output says about its quality: the registration its pose came
 //! from, why a lost frame was lost, and an outside guess seeding \[A\].
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use ecvo_core::{FrameView, LostReason, Mode, MotionPrior, Odometry, Pose, TrackingState};
 use ecvo_synth::DepthNoise;
 
