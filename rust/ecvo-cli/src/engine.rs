@@ -82,7 +82,7 @@ impl CloudFrames {
         match self {
             CloudFrames::None => false,
             CloudFrames::References => out.index == 0 || out.reference_levels > 0,
-            CloudFrames::EveryNth(n) => out.index % n.max(1) as u64 == 0,
+            CloudFrames::EveryNth(n) => out.index.is_multiple_of(n.max(1) as u64),
         }
     }
 }

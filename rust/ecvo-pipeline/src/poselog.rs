@@ -108,7 +108,7 @@ mod tests {
             timestamp: index as f64,
             pose: Pose::identity(),
             state: TrackingState::Tracking,
-            reference_levels: u8::from(index % 3 == 0),
+            reference_levels: u8::from(index.is_multiple_of(3)),
         }
     }
 

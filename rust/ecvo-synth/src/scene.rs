@@ -296,7 +296,8 @@ impl Scene {
     pub fn surface_normal(&self, surface: u32) -> Vector3<f64> {
         if surface < ROOM_SURFACES {
             let mut n = Vector3::zeros();
-            n[[2, 2, 0, 0, 1, 1][surface as usize]] = if surface % 2 == 0 { 1.0 } else { -1.0 };
+            n[[2, 2, 0, 0, 1, 1][surface as usize]] =
+                if surface.is_multiple_of(2) { 1.0 } else { -1.0 };
             n
         } else {
             let s = surface - ROOM_SURFACES;
@@ -310,7 +311,7 @@ impl Scene {
         let n = self.surface_normal(surface);
         if surface < ROOM_SURFACES {
             let axis = [2, 2, 0, 0, 1, 1][surface as usize];
-            if surface % 2 == 0 {
+            if surface.is_multiple_of(2) {
                 p[axis] - self.room_min[axis]
             } else {
                 self.room_max[axis] - p[axis]
