@@ -11,7 +11,7 @@ use crate::prepare::PreparedFrame;
 /// prediction `prior` (the better start at the coarsest step wins). It depends on
 /// the two frames and the prior alone, so it may run before the tracker reaches
 /// `current` (the pipeline's filter stage does so when the tracker is behind) and
-/// be handed to [`Tracker::track_with`].
+/// be handed to [`Tracker::track_with`](super::Tracker::track_with).
 pub fn frame_to_frame(
     estimator: &mut MotionEstimator,
     current: &PreparedFrame,
