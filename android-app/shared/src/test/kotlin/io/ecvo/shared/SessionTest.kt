@@ -189,6 +189,8 @@ class SessionTest {
         assertEquals(2L, c.session!!.refusedTimestamps)
         assertTrue(c.presenter.status.frames, c.presenter.status.frames.contains("2 bad timestamps skipped"))
         // The refused frames are not recorded either (the recording stays a valid stream).
+        // The recorder finishes on a thread of its own: wait for it before reading.
+        assertNotNull(c.session!!.stopRecordingAndWait())
         c.stopSource()
         assertEquals(3, StreamReader(DirectoryFiles(dir)).frames.size)
     }
