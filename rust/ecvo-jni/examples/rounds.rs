@@ -71,23 +71,7 @@ fn main() {
     let trackers = a.next().unwrap_or(10);
     let rounds = a.next().unwrap_or(30);
     let (w, h) = (a.next().unwrap_or(320), a.next().unwrap_or(240));
-    let f = 0.8 * w.max(h) as f64;
-    let args = InitArgs {
-        width: w as i32,
-        height: h as i32,
-        fx: f,
-        fy: f,
-        cx: (w as f64 - 1.0) / 2.0,
-        cy: (h as f64 - 1.0) / 2.0,
-        depth_format: 0,
-        depth_scale: 1000.0,
-        min_confidence: 0,
-        preset: 1,
-        mode: 2,
-        live: true,
-        threads: 2,
-        point_cloud: true,
-    };
+    let args = InitArgs::app(w as i32, h as i32);
     let n = w * h;
     let depth: Vec<u16> = (0..n).map(|i| 900 + ((i * 7) % 300) as u16).collect();
     let gray: Vec<u8> = (0..n).map(|i| ((i * 13) % 251) as u8).collect();

@@ -33,23 +33,7 @@ fn main() {
     if let Some(mb) = a.next() {
         ecvo_jni::set_memory_budget(i64::from(mb) << 20).expect("a positive budget");
     }
-    let f = 0.8 * w.max(h) as f64;
-    let args = InitArgs {
-        width: w,
-        height: h,
-        fx: f,
-        fy: f,
-        cx: (w as f64 - 1.0) / 2.0,
-        cy: (h as f64 - 1.0) / 2.0,
-        depth_format: 0,
-        depth_scale: 1000.0,
-        min_confidence: 0,
-        preset: 1,
-        mode: 2,
-        live: true,
-        threads: 2,
-        point_cloud: true,
-    };
+    let args = InitArgs::app(w, h);
     let mb = |b: usize| b as f64 / (1 << 20) as f64;
     let need = args.memory_needed().expect("valid settings");
     let start = status("VmRSS:");

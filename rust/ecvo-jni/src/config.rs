@@ -69,6 +69,30 @@ pub struct InitArgs {
 }
 
 impl InitArgs {
+    /// What the app passes for a `width` x `height` depth camera in live mode: a
+    /// focal length of 0.8 x the larger side, the principal point at the centre,
+    /// depth in millimetres, the phone preset with two levels, two threads and the
+    /// point cloud (the memory tests and examples measure this).
+    pub fn app(width: jint, height: jint) -> InitArgs {
+        let f = 0.8 * width.max(height) as f64;
+        InitArgs {
+            width,
+            height,
+            fx: f,
+            fy: f,
+            cx: (width as f64 - 1.0) / 2.0,
+            cy: (height as f64 - 1.0) / 2.0,
+            depth_format: 0,
+            depth_scale: 1000.0,
+            min_confidence: 0,
+            preset: 1,
+            mode: 2,
+            live: true,
+            threads: 2,
+            point_cloud: true,
+        }
+    }
+
     /// The tracker configuration, pipeline options and depth decoding these settings
     /// describe, or `IllegalArgument` naming the bad field.
     pub fn build(&self) -> Result<(Config, PipelineOptions, DepthFormat, Confidence), Failure> {

@@ -32,22 +32,9 @@ static SERIAL: Mutex<()> = Mutex::new(());
 const SLACK: isize = 64 << 10;
 
 fn args(w: i32, h: i32, point_cloud: bool) -> InitArgs {
-    let f = 0.8 * w.max(h) as f64;
     InitArgs {
-        width: w,
-        height: h,
-        fx: f,
-        fy: f,
-        cx: (w as f64 - 1.0) / 2.0,
-        cy: (h as f64 - 1.0) / 2.0,
-        depth_format: 0,
-        depth_scale: 1000.0,
-        min_confidence: 0,
-        preset: 1,
-        mode: 2,
-        live: true,
-        threads: 2,
         point_cloud,
+        ..InitArgs::app(w, h)
     }
 }
 
