@@ -273,6 +273,10 @@ pub struct MotionConfig {
     /// registers on depth alone: its intensity residuals have no gradient, so they
     /// add nothing to the normal equations, and their spread is not checked against
     /// `max_intensity_sigma` (a black or dark frame, the lights off, with depth).
+    /// A textured current frame registers on depth alone against a reference with
+    /// fewer (the first frame after a black run): the reference's intensities say
+    /// nothing, and the photometric term would pull the warp toward the current
+    /// frame's dark pixels. 0 keeps the photometric term always.
     pub depth_only_texture_fraction: f64,
 }
 
@@ -496,6 +500,9 @@ impl Config {
         c.keyframes = false;
         c.motion.max_intensity_sigma = f64::INFINITY;
         c.motion.max_depth_sigma_m = f64::INFINITY;
+        // No depth-only `MOTION` against an untextured reference: the photometric
+        // term always counts, as in the paper.
+        c.motion.depth_only_texture_fraction = 0.0;
         c
     }
 

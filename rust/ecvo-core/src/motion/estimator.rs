@@ -63,6 +63,12 @@ pub(super) struct Params {
     /// `Σ_ZZ` is whitened as at least this times `Σ_II` (0 at every step but the
     /// finest, `1 / MotionConfig::max_fine_depth_weight` there).
     pub(super) zz_floor: f64,
+    /// False when the reference frame has too little texture for a photometric term
+    /// and the current frame has enough ([`MotionConfig::depth_only_texture_fraction`]):
+    /// the reference's intensities say nothing, and the current frame's gradients
+    /// would pull the warp toward its dark pixels, so every photometric residual and
+    /// gradient is zero and `MOTION` runs on depth.
+    pub(super) photometric: bool,
 }
 
 impl Params {
@@ -74,6 +80,7 @@ impl Params {
             noise: NoiseGain::of(cfg.depth_noise, cfg.depth_gain as f32),
             scale_tolerance: cfg.scale_tolerance,
             zz_floor: 0.0,
+            photometric: true,
         }
     }
 
@@ -134,7 +141,13 @@ pub(super) fn motion_from<K: Loops>(
         result.status = Status::Failed(Failure::NotFinite);
         return result;
     }
-    let p = Params::of(cfg);
+    // A textured current frame against an untextured reference (the first frame
+    // after a black run): depth alone. Two untextured frames (low contrast
+    // throughout) keep the photometric term, weak as it is.
+    let p = Params {
+        photometric: textured(fj, cfg) || !textured(fi, cfg),
+        ..Params::of(cfg)
+    };
     let mut last_step: Option<StepOutcome> = None;
     let mut scale: Option<Scale> = None;
     let mut t = first.inverse();
@@ -231,7 +244,7 @@ pub(super) fn motion_from<K: Loops>(
     {
         Status::Failed(Failure::TooLarge)
     } else if check.is_some_and(|s| {
-        (s.ii.sqrt() > cfg.max_intensity_sigma && textured(fi, cfg))
+        (s.ii.sqrt() > cfg.max_intensity_sigma && textured(fi, cfg) && p.photometric)
             || s.zz.sqrt() > cfg.max_depth_sigma_m * cfg.depth_gain.max(1e-9)
     }) {
         Status::Failed(Failure::Inconsistent)
@@ -251,8 +264,9 @@ pub(super) fn motion_from<K: Loops>(
     result
 }
 
-/// True when the current frame `fi` has enough texture for its photometric spread to
-/// be checked ([`MotionConfig::depth_only_texture_fraction`]).
+/// True when frame `fi` has enough texture for a photometric term: as the current
+/// frame, for its photometric spread to be checked; as the reference, for the term
+/// to be used at all ([`MotionConfig::depth_only_texture_fraction`]).
 fn textured(fi: &PreparedFrame, cfg: &MotionConfig) -> bool {
     let pixels = fi.levels.first().map_or(0, |l| l.camera().pixels());
     fi.textured_pixels as f64 >= cfg.depth_only_texture_fraction * pixels as f64

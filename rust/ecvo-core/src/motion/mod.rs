@@ -249,6 +249,7 @@ impl Loops for MotionEstimator {
             samples: &level.samples,
             lambda: p.lambda,
             noise: p.noise,
+            photometric: p.photometric,
         };
         let n = self.used;
         let (template, bufs) = (&self.template[..n], &mut self.chunks[..n]);

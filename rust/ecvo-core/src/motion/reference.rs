@@ -41,6 +41,7 @@ impl Loops for Reference {
             samples: &level.samples,
             lambda: p.lambda,
             noise: p.noise,
+            photometric: p.photometric,
         };
         self.chunks.clear();
         for pts in self.points.chunks(CHUNK) {
@@ -176,6 +177,7 @@ struct Warp<'a> {
     samples: &'a [Sample],
     lambda: f32,
     noise: NoiseGain,
+    photometric: bool,
 }
 
 impl Warp<'_> {
@@ -199,7 +201,10 @@ impl Warp<'_> {
             if !(u >= 0.0 && v >= 0.0 && u < umax && v < vmax) {
                 continue;
             }
-            let s = bilinear(self.samples, self.w, u, v);
+            let mut s = bilinear(self.samples, self.w, u, v);
+            if !self.photometric {
+                (s[0], s[1], s[2]) = (q[3], 0.0, 0.0);
+            }
             let ri = s[0] - q[3];
             let rz = s[3] - z;
             let depth_ok = rz.is_finite() && s[4].is_finite() && s[5].is_finite();

@@ -135,6 +135,9 @@ pub(super) struct Warp<'a> {
     pub(super) lambda: f32,
     /// The depth residual's gain as a function of depth.
     pub(super) noise: NoiseGain,
+    /// False: no photometric term (residuals and gradients zero; see
+    /// `Params::photometric`).
+    pub(super) photometric: bool,
 }
 
 /// The depth residual's gain as a function of the predicted depth z (metres, at
@@ -253,6 +256,11 @@ impl Warp<'_> {
             &mut out.dx[..n],
             &mut out.dy[..n],
         );
+        if !self.photometric {
+            for a in [&mut out.ri, &mut out.gx, &mut out.gy] {
+                a[..n].fill(0.0);
+            }
+        }
         out.n = n;
         out.two = out.rz[..n].iter().filter(|r| r.is_finite()).count();
         let end = n.next_multiple_of(LANES);
