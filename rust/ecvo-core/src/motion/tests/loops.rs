@@ -101,7 +101,11 @@ fn loops_match_the_per_point_loops() {
     simd::on_each_path(|path| {
         for (k, &(camera, noise, weighting, model)) in cases.iter().enumerate() {
             let (cfg, fa, fb) = pair(camera, noise, 3 + k as u64, 10, 12, Mode::L2);
-            let p = params(weighting, model);
+            // Every other case without the photometric term (an untextured reference).
+            let p = Params {
+                photometric: k % 2 == 1,
+                ..params(weighting, model)
+            };
             for (step, template) in cfg.motion.levels.iter().zip(&fa.templates) {
                 let level = &fb.levels[step.pyramid_level];
                 let (mut new, mut old) = (MotionEstimator::new(), Reference::default());
@@ -129,6 +133,9 @@ fn loops_match_the_per_point_loops() {
                                 exp.map(f32::to_bits),
                                 "{at} point {i}"
                             );
+                            if !p.photometric {
+                                assert_eq!([r.ri, r.gx, r.gy], [0.0; 3], "{at} point {i}");
+                            }
                             i += 1;
                         }
                     }

@@ -60,6 +60,7 @@ fn params(weighting: Weighting, noise: DepthNoiseModel) -> Params {
         noise: NoiseGain::of(noise, 1.0),
         scale_tolerance: 1e-3,
         zz_floor: 0.0,
+        photometric: true,
     }
 }
 
