@@ -360,11 +360,10 @@ pub struct Config {
     /// `fuse_corrections`. When the keyframe is the previous frame and the
     /// registration is not believed, it is tried once more from the start that lost
     /// the coarsest step. Levels 2 and up correct as in the paper. Needs at least one
-    /// reference level. Off by default and in [`Config::paper`]: with
-    /// [`LookupDepth::Bilateral`] it is better on the suite by group geometric means
-    /// of drift against the chain (real 1.024, fast 0.893, weak 0.691, noise 0.933;
-    /// `docs/accuracy.md`), but after 5 black frames it loses 10 frames and re-anchors
-    /// where the chain loses none (`tests/fault_injection.rs`, issue 46's note).
+    /// reference level. On by default since issue 46 (with
+    /// [`LookupDepth::Bilateral`], chosen on the suite by group geometric means of
+    /// drift against the chain: real 1.024, fast 0.893, weak 0.691, noise 0.933; see
+    /// `docs/accuracy.md`); off in [`Config::paper`] and with `--tracking chain`.
     pub keyframes: bool,
     /// With [`Config::keyframes`]: a frame on which fewer than this fraction of the
     /// keyframe's finest template points land (valid residuals) becomes the new
@@ -467,7 +466,8 @@ impl Config {
             fuse_corrections: true,
             refine_every: 3,
             keyframe_fuse_every: 0,
-            keyframes: false,
+            // The keyframe is the level-1 reference: naive tracking has none.
+            keyframes: used > 0,
             keyframe_min_overlap: 0.5,
             keyframe_max_spread_growth: f64::INFINITY,
             lookup_depth: LookupDepth::Bilateral,

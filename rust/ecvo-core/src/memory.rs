@@ -144,6 +144,8 @@ pub fn preparer_bytes(config: &Config) -> usize {
     let masks = 2 * w * h + 2 * w;
     let rays = 4 * (w + h);
     let spatial = 4 * (2 * r + 1) * (2 * r + 1);
+    // A lookup frame filtered on level 1: its padded depth and spatial weights.
+    let half = crate::prepare::half_bilateral_bytes(config);
     let planes: usize = level_sizes(config).map(|(w, h)| 8 * w * h).sum();
     let selector: usize = config
         .motion
@@ -158,7 +160,7 @@ pub fn preparer_bytes(config: &Config) -> usize {
         })
         .max()
         .unwrap_or(0);
-    let scratch = padded + smoothed + masks + rays + spatial + planes + selector;
+    let scratch = padded + smoothed + masks + rays + spatial + half + planes + selector;
     scratch + finisher_bytes(config, scratch)
 }
 

@@ -63,6 +63,32 @@ pub(crate) fn load_padded(
     }
 }
 
+/// [`load_padded`] from depth already in metres (NaN where missing): a coarser
+/// level's planes, for the half-resolution filter of a lookup frame.
+#[inline(never)]
+pub(crate) fn load_padded_metres(
+    depth: &[f32],
+    w: usize,
+    h: usize,
+    radius: usize,
+    padded: &mut Vec<f32>,
+) {
+    let pw = w + 2 * radius;
+    let len = pw * (h + 2 * radius);
+    if padded.len() != len {
+        padded.clear();
+        padded.resize(len, 0.0);
+    }
+    for (dst, src) in padded[radius * pw..]
+        .chunks_exact_mut(pw)
+        .zip(depth.chunks_exact(w))
+    {
+        for (d, &z) in dst[radius..radius + w].iter_mut().zip(src) {
+            *d = if z.is_nan() { 0.0 } else { z };
+        }
+    }
+}
+
 /// The bilateral filter of `padded` (from [`load_padded`]) into `out` (`w` wide),
 /// NaN where the centre is missing. The range weight is `(1 − x/4)⁴` for
 /// `x = Δz² / (2σ²)`, clamped at 0: it follows `exp(−x)` closely near 0, is exactly 0

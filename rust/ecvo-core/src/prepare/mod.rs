@@ -37,7 +37,7 @@
 //! bit on every path.
 
 use crate::camera::{Camera, FrameView};
-use crate::config::{Config, FilterConfig, LookupDepth, MotionLevel};
+use crate::config::{BilateralConfig, Config, FilterConfig, LookupDepth, MotionLevel};
 use crate::error::Result;
 
 use rayon::prelude::*;
@@ -57,7 +57,7 @@ pub(crate) mod simd;
 mod tests;
 
 pub use side::{ReferenceSide, Templates};
-pub(crate) use side::{lookup_depth, side_bytes};
+pub(crate) use side::{half_bilateral_bytes, lookup_depth, side_bytes};
 
 /// Fewest pixels one rayon task of a row-parallel loop takes. Handing work to
 /// another thread costs tens of microseconds, so an image is only split when each
@@ -265,6 +265,11 @@ pub struct Preparer {
     smoothed: Vec<f32>,
     /// Bilateral spatial weights, row-major over the window.
     spatial: Vec<f32>,
+    /// A lookup frame whose finest tracked level is level 1 (640x480 under the
+    /// default schedule): its bilateral filter runs on level 1, with this window
+    /// ([`side::half_bilateral`]), its spatial weights and its padded depth.
+    half: Option<(BilateralConfig, Vec<f32>)>,
+    padded_half: Vec<f32>,
     /// `(x - cx) / fx` per column and `(y - cy) / fy` per row of level 0.
     ray_x: Vec<f32>,
     ray_y: Vec<f32>,
@@ -296,6 +301,8 @@ impl Preparer {
             .bilateral
             .map_or(Vec::new(), |b| spatial_weights(&b));
         let lookup = side::lookup_depth(config);
+        let tracked = tracked_levels(config);
+        let half = side::half_bilateral(config, &tracked).map(|b| (b, spatial_weights(&b)));
         let c = config.camera;
         let (ray_x, ray_y) = rays(&c);
         Preparer {
@@ -303,10 +310,12 @@ impl Preparer {
             filter: config.filter,
             schedule: config.motion.levels.clone(),
             pyramid_depth: config.pyramid_depth(),
-            tracked: tracked_levels(config),
+            tracked,
             padded_depth: Vec::new(),
             smoothed: Vec::new(),
             spatial,
+            half,
+            padded_half: Vec::new(),
             ray_x,
             ray_y,
             normal_drop: Vec::new(),
@@ -375,7 +384,7 @@ impl Preparer {
         out.removed_by_normal = counts.by_normal;
         out.removed_by_contour = counts.by_contour;
         out.valid_depth = counts.valid;
-        self.lookup_levels(out);
+        self.lookup_levels(out, 0);
         self.build_templates(&out.levels, &mut out.templates);
         Ok(())
     }
@@ -436,11 +445,7 @@ impl Preparer {
         };
         let spatial = self.spatial.as_slice();
         let (w, h) = (self.camera.width, self.camera.height);
-        let range = bilateral::DepthRange {
-            scale: 1.0 / self.camera.depth_scale as f32,
-            lo: self.filter.min_depth_m as f32,
-            hi: self.filter.max_depth_m as f32,
-        };
+        let range = self.depth_range();
         self.smoothed.resize(w * h, f32::NAN);
         match b {
             Some(b) => {
@@ -458,15 +463,24 @@ impl Preparer {
         }
     }
 
+    /// How raw depth becomes metres.
+    fn depth_range(&self) -> bilateral::DepthRange {
+        bilateral::DepthRange {
+            scale: 1.0 / self.camera.depth_scale as f32,
+            lo: self.filter.min_depth_m as f32,
+            hi: self.filter.max_depth_m as f32,
+        }
+    }
+
     /// Pass 5: from level 0's planes, the pyramid's planes and the samples of every
     /// tracked level, the texture count; level 0's planes go to `out.base` when level
-    /// 0 is not tracked.
-    fn lookup_levels(&mut self, out: &mut PreparedFrame) {
+    /// 0 is not tracked. The planes of levels up to `made` are there already.
+    fn lookup_levels(&mut self, out: &mut PreparedFrame, made: usize) {
         out.levels
             .resize_with(self.pyramid_depth + 1, ImageLevel::default);
         let mut level_cam = self.camera;
         for l in 0..=self.pyramid_depth {
-            if l > 0 {
+            if l > made {
                 let (head, tail) = self.planes.split_at_mut(l);
                 pyramid::downsample(
                     &head[l - 1],
@@ -474,6 +488,8 @@ impl Preparer {
                     &mut tail[0],
                     level_cam.half(),
                 );
+            }
+            if l > 0 {
                 level_cam = level_cam.half();
             }
             let level = &mut out.levels[l];

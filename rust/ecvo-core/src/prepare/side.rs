@@ -15,9 +15,9 @@ use std::ops::Deref;
 use std::sync::{PoisonError, RwLock, RwLockReadGuard};
 
 use super::simd::multiversion;
-use super::{PreparedFrame, Preparer, Template, pyramid};
+use super::{PreparedFrame, Preparer, Template, bilateral, pyramid};
 use crate::camera::{Camera, FrameView};
-use crate::config::{Config, LookupDepth};
+use crate::config::{BilateralConfig, Config, LookupDepth};
 
 /// The raw planes a frame prepared for lookup keeps, to finish its reference side
 /// later.
@@ -150,6 +150,35 @@ pub(crate) fn lookup_depth(config: &Config) -> Option<LookupDepth> {
         .then_some(config.lookup_depth)
 }
 
+/// The bilateral window of a lookup frame filtered on level 1: with
+/// [`LookupDepth::Bilateral`] when no step tracks level 0 (640x480 under the default
+/// schedule), the filter runs after the 2x2 downsampling, on a quarter of the pixels,
+/// with the window halved so that it covers the same patch of the scene (radius 2
+/// and σ 1.5 px become 1 and 0.75 px). On the suite against the full-resolution
+/// filter (`docs/accuracy.md`): drift 0.998 on the real cells, 1.016 on the noise
+/// cells, the others unchanged (they track level 0); tracking 0.63x the
+/// instructions per frame at 640x480 (`docs/speed.md`). `None` otherwise.
+pub(crate) fn half_bilateral(config: &Config, tracked: &[bool]) -> Option<BilateralConfig> {
+    let b = config.filter.bilateral?;
+    (lookup_depth(config) == Some(LookupDepth::Bilateral) && tracked.len() > 1 && !tracked[0])
+        .then_some(BilateralConfig {
+            radius: b.radius.div_ceil(2),
+            sigma_space_px: b.sigma_space_px * 0.5,
+            ..b
+        })
+}
+
+/// The preparer's scratch for [`half_bilateral`]: level 1's padded depth and the
+/// window's spatial weights (0 without it).
+pub(crate) fn half_bilateral_bytes(config: &Config) -> usize {
+    let tracked = super::tracked_levels(config);
+    half_bilateral(config, &tracked).map_or(0, |b| {
+        let c = config.camera.half();
+        let r = b.radius;
+        4 * (c.width + 2 * r) * (c.height + 2 * r) + 4 * (2 * r + 1) * (2 * r + 1)
+    })
+}
+
 /// Level 0's compact planes without removal: intensity in [0, 1], and depth (NaN
 /// where missing) kept only where it agrees within [`EDGE_AGREEMENT`] with its four
 /// neighbours (the cheap stand-in of the contour filter: the warp interpolates no
@@ -249,19 +278,52 @@ impl Preparer {
             }
         }
         debug_assert_eq!(self.lookup, Some(depth));
-        self.smooth_depth(view.depth, true);
         self.planes
             .resize_with(self.pyramid_depth + 1, pyramid::Planes::default);
-        out.valid_depth = plain_planes(
-            view.intensity,
-            &self.smoothed,
-            self.camera.width,
-            &mut self.planes[0],
-        );
+        let made = if let Some((b, spatial)) = &self.half
+            && depth == LookupDepth::Bilateral
+        {
+            // Level 0 is not tracked: raw depth with the edge rule, the 2x2
+            // agreement rule down to level 1, and the bilateral filter there, on a
+            // quarter of the pixels.
+            let (w, h) = (self.camera.width, self.camera.height);
+            self.smoothed.resize(w * h, f32::NAN);
+            bilateral::load_plain(view.depth, self.depth_range(), &mut self.smoothed);
+            out.valid_depth = plain_planes(view.intensity, &self.smoothed, w, &mut self.planes[0]);
+            let c1 = self.camera.half();
+            let (head, tail) = self.planes.split_at_mut(1);
+            pyramid::downsample(&head[0], w, &mut tail[0], c1);
+            let level1 = &mut tail[0];
+            bilateral::load_padded_metres(
+                &level1.depth,
+                c1.width,
+                c1.height,
+                b.radius,
+                &mut self.padded_half,
+            );
+            bilateral::filter(
+                &self.padded_half,
+                spatial,
+                c1.width,
+                b.radius,
+                b.sigma_depth_rel,
+                &mut level1.depth,
+            );
+            1
+        } else {
+            self.smooth_depth(view.depth, true);
+            out.valid_depth = plain_planes(
+                view.intensity,
+                &self.smoothed,
+                self.camera.width,
+                &mut self.planes[0],
+            );
+            0
+        };
         out.removed_by_normal = 0;
         out.removed_by_contour = 0;
         out.normals.clear();
-        self.lookup_levels(out);
+        self.lookup_levels(out, made);
     }
 
     /// Finishes the reference side of `frame` if it was prepared for lookup and is

@@ -267,7 +267,10 @@ fn refused_corrections_do_not_promote_and_are_counted() {
     // MAX_REFUSED_CORRECTIONS in a row the reference is replaced without one (counted
     // as stale). The counters add up to the MOTION calls made.
     let seq = sequence(DepthNoise::phone_like(), 6);
+    // The chain's corrections ([B] after [A]; keyframe tracking corrects level 1
+    // by registering against the keyframe).
     let mut cfg = config(&seq, Mode::L1);
+    cfg.keyframes = false;
     cfg.max_correction_distance = 1e-12;
     let mut odo = Odometry::new(cfg.clone()).unwrap();
     let mut last_ref = 0;
@@ -300,7 +303,9 @@ fn refused_corrections_do_not_promote_and_are_counted() {
         "{c:?}"
     );
     // With the default gate the same stream's corrections are accepted.
-    let (odo, _) = run(&seq, config(&seq, Mode::L1), 90);
+    let mut chain = config(&seq, Mode::L1);
+    chain.keyframes = false;
+    let (odo, _) = run(&seq, chain, 90);
     let c = odo.tracker().counters();
     assert!(
         c.references[0] > 0 && c.rejected_corrections * 10 <= c.references[0],

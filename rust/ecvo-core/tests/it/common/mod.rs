@@ -30,7 +30,8 @@ pub fn config(seq: &SynthSequence, mode: Mode) -> Config {
     Config::new(camera_of(&seq.camera), Preset::Pc, mode)
 }
 
-/// Frame `i` prepared with `cfg`, and its ground-truth pose.
+/// Frame `i` prepared whole with `cfg` (both sides, as a reference is), and its
+/// ground-truth pose.
 pub fn prepared(seq: &SynthSequence, i: usize, cfg: &Config) -> (PreparedFrame, Pose) {
     let f = seq.frame(i);
     prepare_raw(cfg, f.timestamp, &f.intensity, &f.depth, f.pose)
@@ -43,7 +44,9 @@ pub fn prepare_raw(
     depth: &[u16],
     pose: Pose,
 ) -> (PreparedFrame, Pose) {
-    let mut p = Preparer::new(cfg);
+    // Whole: these frames are registered against (with keyframe tracking a
+    // `Preparer::new` frame would be prepared for lookup only).
+    let mut p = Preparer::whole(cfg);
     let mut out = PreparedFrame::default();
     p.prepare_into(
         FrameView {
