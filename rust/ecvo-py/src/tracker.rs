@@ -123,7 +123,7 @@ impl Inner {
 /// default), prior ("identity", "velocity"), max_correction_distance,
 /// max_fine_depth_weight, min_predicted_decrease, min_update_px (floats),
 /// scale_passes, refine_every (ints), corrections ("fuse", "replace"), tracking
-/// ("chain": the paper's frame-to-frame chain, the default; "keyframe"),
+/// ("keyframe": the default, "chain": the paper's frame-to-frame chain),
 /// keyframe_overlap, keyframe_spread (floats), lookup_depth ("bilateral": the
 /// default, "raw", "filtered"), keyframe_fuse_every (int), memory_budget
 /// (int, bytes: the engine refuses a configuration that needs more). An unknown
