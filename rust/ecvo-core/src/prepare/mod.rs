@@ -380,7 +380,7 @@ impl Preparer {
             return Ok(());
         }
         out.light = false;
-        let counts = self.filtered_planes(view, &mut out.normals);
+        let counts = self.filtered_planes(view, None, &mut out.normals);
         out.removed_by_normal = counts.by_normal;
         out.removed_by_contour = counts.by_contour;
         out.valid_depth = counts.valid;
@@ -391,14 +391,22 @@ impl Preparer {
 
     /// Passes 1 to 4: raw depth to metres, the bilateral filter, normals, the removal
     /// masks, applied into level 0's compact planes (`self.planes[0]`); `normals` is
-    /// filled when the preparer keeps them.
+    /// filled when the preparer keeps them. `smoothed`: passes 1 and 2 done already
+    /// (a lookup frame's filtered depth, [`side::RawPlanes::smoothed`]).
     fn filtered_planes(
         &mut self,
         view: FrameView<'_>,
+        smoothed: Option<&[f32]>,
         normals: &mut Vec<[f32; 3]>,
     ) -> removal::Counts {
         let (w, h) = (self.camera.width, self.camera.height);
-        self.smooth_depth(view.depth, false);
+        match smoothed {
+            Some(s) => {
+                self.smoothed.clear();
+                self.smoothed.extend_from_slice(s);
+            }
+            None => self.smooth_depth(view.depth, false),
+        }
         let angles = removal::Angles {
             cos_n: self
                 .filter

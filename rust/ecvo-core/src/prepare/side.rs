@@ -25,6 +25,11 @@ use crate::config::{BilateralConfig, Config, LookupDepth};
 pub(crate) struct RawPlanes {
     pub intensity: Vec<u8>,
     pub depth: Vec<u16>,
+    /// The depth through the bilateral filter in metres (NaN where missing) when the
+    /// lookup levels were made from the very filter the reference side uses (full
+    /// resolution): finishing takes it instead of filtering again, bit for bit the
+    /// same. Empty otherwise.
+    pub smoothed: Vec<f32>,
 }
 
 /// What only a reference reads, finished once ([`Preparer::finish`]).
@@ -130,9 +135,17 @@ impl PreparedFrame {
     /// Reserves the buffers of a lookup frame's raw planes and reference side.
     pub(crate) fn reserve_side(&mut self, config: &Config, templates: Vec<Template>) {
         let n = config.camera.pixels();
+        let smoothed = if lookup_depth(config) == Some(LookupDepth::Bilateral)
+            && half_bilateral(config, &super::tracked_levels(config)).is_none()
+        {
+            n
+        } else {
+            0
+        };
         self.raw = RawPlanes {
             intensity: Vec::with_capacity(n),
             depth: Vec::with_capacity(n),
+            smoothed: Vec::with_capacity(smoothed),
         };
         let side = self.reference.get_mut();
         side.templates = templates;
@@ -283,6 +296,7 @@ impl Preparer {
         let made = if let Some((b, spatial)) = &self.half
             && depth == LookupDepth::Bilateral
         {
+            out.raw.smoothed.clear();
             // Level 0 is not tracked: raw depth with the edge rule, the 2x2
             // agreement rule down to level 1, and the bilateral filter there, on a
             // quarter of the pixels.
@@ -318,6 +332,13 @@ impl Preparer {
                 self.camera.width,
                 &mut self.planes[0],
             );
+            // The frame keeps the filtered depth for its reference side; the preparer
+            // takes the frame's old buffer for the next frame (no copy).
+            if depth == LookupDepth::Bilateral && self.filter.bilateral.is_some() {
+                std::mem::swap(&mut self.smoothed, &mut out.raw.smoothed);
+            } else {
+                out.raw.smoothed.clear();
+            }
             0
         };
         out.removed_by_normal = 0;
@@ -353,7 +374,8 @@ impl Preparer {
             depth: &frame.raw.depth,
         };
         let side = &mut *side;
-        let counts = self.filtered_planes(view, &mut side.normals);
+        let smoothed = (!frame.raw.smoothed.is_empty()).then_some(frame.raw.smoothed.as_slice());
+        let counts = self.filtered_planes(view, smoothed, &mut side.normals);
         side.valid_depth = counts.valid;
         side.removed_by_normal = counts.by_normal;
         side.removed_by_contour = counts.by_contour;
@@ -396,10 +418,13 @@ impl Preparer {
 }
 
 /// The bytes a lookup frame adds to a frame prepared whole: its raw planes (3 a
-/// pixel) and the filtered level-0 planes of its reference side (8 a pixel).
+/// pixel, 7 with the filtered depth kept) and the filtered level-0 planes of its
+/// reference side (8 a pixel).
 pub(crate) fn side_bytes(config: &Config) -> usize {
     if lookup_depth(config).is_some() {
-        11 * config.camera.pixels()
+        let kept = lookup_depth(config) == Some(LookupDepth::Bilateral)
+            && half_bilateral(config, &super::tracked_levels(config)).is_none();
+        (11 + 4 * kept as usize) * config.camera.pixels()
     } else {
         0
     }
