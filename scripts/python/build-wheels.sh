@@ -9,14 +9,20 @@
 # result as auditwheel does). Then: the wheel must be under 1.5 MB, its tag
 # manylinux_2_17 (or lower), `auditwheel show` must agree with the tag; the x86_64
 # wheel is installed in a fresh venv and tracks the test stream (ATE under 2 mm).
-# The aarch64 wheel is installed and run the same way when an aarch64 Python is
-# available through qemu-user (ECVO_AARCH64_PYTHON=/path/to/chroot's python3 run by
-# binfmt, e.g. a debootstrapped Debian bullseye arm64); otherwise only its tag and
-# auditwheel are checked, and the script says so.
+# The aarch64 wheel tracks the same stream under qemu-user: Debian's arm64 CPython
+# (python3.11-minimal and libpython3.11-stdlib for arm64, fetched with `apt-get
+# download` and unpacked in a scratch folder, nothing installed), run by qemu-aarch64
+# with the wheel and numpy's aarch64 wheel put in a folder on its PYTHONPATH by the
+# host's pip (`--platform manylinux2014_aarch64`). ECVO_AARCH64_PYTHON=/path/to/python3
+# (an aarch64 Python that runs here, e.g. in a chroot run by binfmt) replaces that.
+# Without qemu-aarch64 or apt, only the tag and auditwheel are checked, and the script
+# says so.
 #
 # Needs: cargo with the Rust targets (`rustup target add aarch64-unknown-linux-gnu`);
 # maturin, ziglang and auditwheel come from PyPI into a throwaway venv. A missing
-# Rust target is an error naming the command that adds it.
+# Rust target is an error naming the command that adds it. For the aarch64 run:
+# qemu-user and dpkg's arm64 architecture (scripts/android/test-core-aarch64.sh
+# --setup-only installs both).
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -73,20 +79,38 @@ for arch in "${arches[@]}"; do
     grep -q "manylinux_2_17_$arch" "$WORK/audit.txt" || {
         echo "build-wheels.sh: auditwheel does not place $name at manylinux_2_17" >&2; exit 1; }
 
-    py=""
     if [ "$arch" = "$(uname -m)" ]; then
-        py="$PYTHON"
-    elif [ -n "${ECVO_AARCH64_PYTHON:-}" ] && [ "$arch" = aarch64 ]; then
-        py="$ECVO_AARCH64_PYTHON"
-    fi
-    if [ -z "$py" ]; then
-        echo "== $name: NOT run (no $arch Python here; set ECVO_AARCH64_PYTHON); tag and auditwheel checked only"
+        echo "== $name: fresh venv, install, track testdata"
+        "$PYTHON" -m venv "$WORK/venv-$arch"
+        "$WORK/venv-$arch/bin/pip" install -q --disable-pip-version-check "$wheel"
+        run=("$WORK/venv-$arch/bin/python")
+    elif [ "$arch" = aarch64 ] && [ -n "${ECVO_AARCH64_PYTHON:-}" ]; then
+        echo "== $name: fresh venv of $ECVO_AARCH64_PYTHON, install, track testdata"
+        "$ECVO_AARCH64_PYTHON" -m venv "$WORK/venv-$arch"
+        "$WORK/venv-$arch/bin/pip" install -q --disable-pip-version-check "$wheel"
+        run=("$WORK/venv-$arch/bin/python")
+    elif [ "$arch" = aarch64 ] && command -v qemu-aarch64 >/dev/null && command -v apt-get >/dev/null; then
+        echo "== $name: Debian's arm64 CPython under qemu-aarch64, wheel + numpy (aarch64) on its path, track testdata"
+        arm="$WORK/arm64"
+        mkdir -p "$arm/debs"
+        (cd "$arm/debs" && apt-get download -q python3.11-minimal:arm64 libpython3.11-minimal:arm64 \
+            libpython3.11-stdlib:arm64 libexpat1:arm64 >/dev/null)
+        for deb in "$arm"/debs/*.deb; do dpkg -x "$deb" "$arm/root"; done
+        pip_arm=(--disable-pip-version-check -q --target "$arm/site" --only-binary=:all: --implementation cp
+            --python-version 3.11 --platform manylinux_2_17_aarch64 --platform manylinux2014_aarch64)
+        "$PYTHON" -m pip install "${pip_arm[@]}" "numpy<2.3" 2>&1 | grep -v "^WARNING: Running pip as" || true
+        "$PYTHON" -m pip install "${pip_arm[@]}" --no-deps "$wheel" 2>&1 | grep -v "^WARNING: Running pip as" || true
+        run=(env PYTHONHOME="$arm/root/usr" PYTHONPATH="$arm/site"
+            LD_LIBRARY_PATH="$arm/root/usr/lib/aarch64-linux-gnu:$arm/root/lib/aarch64-linux-gnu"
+            qemu-aarch64 "$arm/root/usr/bin/python3.11")
+    else
+        echo "== $name: NOT run (no qemu-aarch64 or apt-get, and no ECVO_AARCH64_PYTHON); tag and auditwheel checked only"
+        # In CI a wheel that was not run is a failure, not a skip.
+        [ "${CI:-}" != true ] || exit 1
         continue
     fi
-    echo "== $name: fresh venv, install, track testdata"
-    "$py" -m venv "$WORK/venv-$arch"
-    "$WORK/venv-$arch/bin/pip" install -q --disable-pip-version-check "$wheel"
-    (cd "$WORK" && "$WORK/venv-$arch/bin/python" - "$ROOT/testdata/synth_phone_320x180" <<'PY'
+    (cd "$WORK" && "${run[@]}" - "$ROOT/testdata/synth_phone_320x180" <<'PY'
+import platform
 import sys
 
 import ecvo
@@ -97,7 +121,7 @@ with ecvo.Tracker(seq.camera) as tracker:
         result = tracker.push(*frame)
     ate = ecvo.ate(seq.groundtruth, tracker.trajectory())
 assert result.state == "tracking" and ate["rmse"] < 0.002, ate["rmse"]
-print(f"   ecvo {ecvo.__version__} from the wheel: {len(tracker)} frames, ATE {ate['rmse'] * 1e3:.2f} mm, simd {ecvo._ecvo.simd_path}")
+print(f"   ecvo {ecvo.__version__} from the wheel on {platform.machine()}, {platform.libc_ver()}: {len(tracker)} frames, ATE {ate['rmse'] * 1e3:.2f} mm, simd {ecvo._ecvo.simd_path}")
 PY
     )
 done

@@ -58,7 +58,8 @@
 //! `natives` (the method table and wrappers), `config` (`nativeInit`'s arguments),
 //! `tracker` (handles and the registry), `frames` (buffers and arrays), `depth16`,
 //! `layout` (code tables and array layouts shared with Kotlin), `error` (the one
-//! mapping of failures to Java exceptions).
+//! mapping of failures to Java exceptions), `blocks` (the library's allocator: large
+//! blocks mapped and unmapped on their own, so that release gives them back).
 //!
 //! ## Errors
 //!
@@ -69,6 +70,8 @@
 //! `RuntimeException` for a stage failure or a caught panic (`native_method!` wraps
 //! every call in `catch_unwind`; the workspace builds with `panic = "unwind"`).
 
+#[cfg(unix)]
+pub mod blocks;
 mod config;
 mod depth16;
 mod error;
@@ -92,6 +95,12 @@ pub use natives::*;
 pub use tracker::NativeTracker;
 
 use jni::sys::jint;
+
+/// Large blocks as mappings of their own, unmapped when freed, so that a released
+/// tracker's frames leave no resident memory in the C library's arenas ([`blocks`]).
+#[cfg(unix)]
+#[global_allocator]
+static ALLOCATOR: blocks::Blocks = blocks::Blocks;
 
 /// Called by the JVM when the library is loaded: initialises logging once (Android's
 /// logcat through `android_logger`; elsewhere whatever `log` backend the host set up), and

@@ -143,7 +143,10 @@ unsafe extern "C" {
 /// glibc keeps freed memory in its arenas (the main heap and one per thread that
 /// allocated), so without this the RSS after each round of "10 trackers, one frame each,
 /// released" grew from 20 MB to 705 MB over 30 rounds (`--example rounds`); with it,
-/// from 9 to 51 MB. Other C libraries (Android's bionic) manage their own.
+/// from 9 to 51 MB, the rest in the tops of the per-thread arenas, which `malloc_trim`
+/// does not shrink. The large blocks are now mappings of their own ([`crate::blocks`]),
+/// so this only concerns the small ones. Other C libraries (Android's bionic) manage
+/// their own.
 pub(crate) fn give_back_memory() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: malloc_trim only walks glibc's own arenas; it is thread-safe.

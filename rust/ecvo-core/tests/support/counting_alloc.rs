@@ -1,6 +1,6 @@
-//! A counting global allocator for the memory tests of ecvo-core, ecvo-pipeline and
-//! ecvo-jni (each includes this file with `#[path]` and installs `Counting` as its
-//! `#[global_allocator]`): bytes outstanding (allocated minus freed) and their peak.
+//! A counting global allocator for the memory tests of ecvo-core and ecvo-pipeline
+//! (each includes this file with `#[path]` and installs `Counting` as its
+//! `#[global_allocator]`; ecvo-jni's allocator counts the same itself, `ecvo_jni::blocks`): bytes outstanding (allocated minus freed) and their peak.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
