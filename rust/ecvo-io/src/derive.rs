@@ -107,12 +107,23 @@ pub fn half_depth(src: &[u16], width: usize, height: usize) -> Vec<u16> {
     out
 }
 
-/// The RGB pixels of an 8-bit colour or gray PNG of `width` x `height` (gray
-/// repeated, alpha dropped).
+/// The RGB pixels of a colour or gray PNG of `width` x `height` (gray repeated).
 fn read_rgb(path: &Path, width: usize, height: usize) -> Result<Vec<u8>> {
-    let mut rgb = Vec::new();
-    crate::png::read_colour_png(path, width, height, &mut rgb)?;
-    Ok(rgb)
+    let bad = |why: String| Error::InvalidInput(format!("{}: {why}", path.display()));
+    let img = image::ImageReader::open(path)
+        .map_err(|e| Error::io(path, e))?
+        .with_guessed_format()
+        .map_err(|e| Error::io(path, e))?
+        .decode()
+        .map_err(|e| bad(e.to_string()))?;
+    if (img.width() as usize, img.height() as usize) != (width, height) {
+        return Err(bad(format!(
+            "{}x{}, not {width}x{height}",
+            img.width(),
+            img.height()
+        )));
+    }
+    Ok(img.to_rgb8().into_raw())
 }
 
 /// One data line of a list: its text as written, timestamp and file.

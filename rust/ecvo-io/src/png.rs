@@ -6,6 +6,9 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Cursor, Seek, Write};
 use std::path::Path;
 
+use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+use image::{ExtendedColorType, ImageEncoder};
+
 use crate::error::{Error, Result};
 use crate::files::open_regular;
 
@@ -325,14 +328,12 @@ fn depth_from<R: BufRead + Seek>(
     })
 }
 
-/// Writes `bytes` (big-endian samples) as a gray PNG of `bits`, fast deflate with
-/// adaptive filters.
 fn write_png(
     path: &Path,
     bytes: &[u8],
     width: usize,
     height: usize,
-    bits: png::BitDepth,
+    ct: ExtendedColorType,
 ) -> Result<()> {
     let (w, h) = match (u32::try_from(width), u32::try_from(height)) {
         (Ok(w), Ok(h)) => (w, h),
@@ -345,15 +346,9 @@ fn write_png(
     };
     let file = File::create(path).map_err(|e| Error::io(path, e))?;
     let mut writer = BufWriter::new(file);
-    let encode_err = |e: png::EncodingError| Error::image(path, format!("cannot encode PNG: {e}"));
-    let mut encoder = png::Encoder::new(&mut writer, w, h);
-    encoder.set_color(png::ColorType::Grayscale);
-    encoder.set_depth(bits);
-    encoder.set_compression(png::Compression::Fast);
-    encoder.set_filter(png::Filter::Adaptive);
-    let mut png_writer = encoder.write_header().map_err(encode_err)?;
-    png_writer.write_image_data(bytes).map_err(encode_err)?;
-    png_writer.finish().map_err(encode_err)?;
+    PngEncoder::new_with_quality(&mut writer, CompressionType::Fast, FilterType::Adaptive)
+        .write_image(bytes, w, h, ct)
+        .map_err(|e| Error::image(path, format!("cannot encode PNG: {e}")))?;
     writer.flush().map_err(|e| Error::io(path, e))
 }
 
@@ -377,7 +372,7 @@ pub fn write_intensity_png(
 ) -> Result<()> {
     let path = path.as_ref();
     check_len(path, "intensity", intensity.len(), width, height)?;
-    write_png(path, intensity, width, height, png::BitDepth::Eight)
+    write_png(path, intensity, width, height, ExtendedColorType::L8)
 }
 
 /// Writes `depth` (`width * height`, row-major) as a 16-bit gray PNG.
@@ -389,9 +384,8 @@ pub fn write_depth_png(
 ) -> Result<()> {
     let path = path.as_ref();
     check_len(path, "depth", depth.len(), width, height)?;
-    // PNG samples are big-endian.
-    let bytes: Vec<u8> = depth.iter().flat_map(|d| d.to_be_bytes()).collect();
-    write_png(path, &bytes, width, height, png::BitDepth::Sixteen)
+    let bytes: Vec<u8> = depth.iter().flat_map(|d| d.to_ne_bytes()).collect();
+    write_png(path, &bytes, width, height, ExtendedColorType::L16)
 }
 
 #[cfg(test)]

@@ -10,6 +10,7 @@ use ecvo_io::{
     Camera, CameraPreset, Error, Frame, Layout, Pose, Sequence, SequenceWriter, Trajectory,
     dataset_for_test, load_camera_json, png::rgb_to_gray, save_camera_json,
 };
+use image::ExtendedColorType;
 
 // ---------------------------------------------------------------- real datasets
 
@@ -141,16 +142,8 @@ fn colour_dataset_is_converted_to_gray() {
     let gt = seq.groundtruth().unwrap();
     assert!(gt.stamps[0] < seq.timestamps()[0] && *gt.stamps.last().unwrap() > seq.timestamps()[8]);
     let f = seq.load_frame(0).unwrap();
-    // The colour PNG decoded by the `png` crate alone, not through ecvo-io.
-    let mut reader = png::Decoder::new(std::io::BufReader::new(
-        std::fs::File::open(&seq.frames()[0].rgb).unwrap(),
-    ))
-    .read_info()
-    .unwrap();
-    assert_eq!(reader.info().color_type, png::ColorType::Rgb);
-    let mut rgb = vec![0; reader.output_buffer_size().unwrap()];
-    reader.next_frame(&mut rgb).unwrap();
-    for (k, p) in rgb.chunks_exact(3).enumerate().step_by(997) {
+    let rgb = image::open(&seq.frames()[0].rgb).unwrap().to_rgb8();
+    for (k, p) in rgb.pixels().enumerate().step_by(997) {
         assert_eq!(f.intensity[k], rgb_to_gray(p[0], p[1], p[2]));
     }
     let frames: Vec<Frame> = seq.reader(None, 2).map(|f| f.unwrap()).collect();
@@ -241,8 +234,7 @@ fn icl_nuim_layout_uses_ids_as_timestamps() {
             &rgb,
             16,
             12,
-            png::ColorType::Rgb,
-            png::BitDepth::Eight,
+            ExtendedColorType::Rgb8,
         );
         ecvo_io::png::write_depth_png(dir.join(format!("depth/{id}.png")), &d, 16, 12).unwrap();
         assoc.push_str(&format!("{id} depth/{id}.png {id} rgb/{id}.png\n"));
@@ -378,14 +370,7 @@ fn wrong_bit_depth_colour_type_and_size_are_named() {
 
     // 16-bit gray as intensity.
     let d16: Vec<u8> = vec![7; 16 * 12 * 2];
-    write_raw_png(
-        &f1.rgb,
-        &d16,
-        16,
-        12,
-        png::ColorType::Grayscale,
-        png::BitDepth::Sixteen,
-    );
+    write_raw_png(&f1.rgb, &d16, 16, 12, ExtendedColorType::L16);
     let msg = seq.load_frame(1).unwrap_err().to_string();
     assert!(
         msg.contains(&*f1.rgb.to_string_lossy()) && msg.contains("16-bit gray"),
@@ -394,26 +379,12 @@ fn wrong_bit_depth_colour_type_and_size_are_named() {
 
     // RGBA intensity is fine.
     let rgba: Vec<u8> = (0..16 * 12).flat_map(|k| [k as u8, 0, 255, 9]).collect();
-    write_raw_png(
-        &f1.rgb,
-        &rgba,
-        16,
-        12,
-        png::ColorType::Rgba,
-        png::BitDepth::Eight,
-    );
+    write_raw_png(&f1.rgb, &rgba, 16, 12, ExtendedColorType::Rgba8);
     let f = seq.load_frame(1).unwrap();
     assert_eq!(f.intensity[3], rgb_to_gray(3, 0, 255));
 
     // 8-bit depth.
-    write_raw_png(
-        &f1.depth,
-        &[1u8; 16 * 12],
-        16,
-        12,
-        png::ColorType::Grayscale,
-        png::BitDepth::Eight,
-    );
+    write_raw_png(&f1.depth, &[1u8; 16 * 12], 16, 12, ExtendedColorType::L8);
     let msg = seq.load_frame(1).unwrap_err().to_string();
     assert!(
         msg.contains(&*f1.depth.to_string_lossy()) && msg.contains("8-bit gray"),
@@ -426,8 +397,7 @@ fn wrong_bit_depth_colour_type_and_size_are_named() {
         &vec![1u8; 16 * 12 * 6],
         16,
         12,
-        png::ColorType::Rgb,
-        png::BitDepth::Sixteen,
+        ExtendedColorType::Rgb16,
     );
     let msg = seq.load_frame(1).unwrap_err().to_string();
     assert!(msg.contains("depth") && msg.contains("16-bit RGB"), "{msg}");
@@ -449,14 +419,7 @@ fn wrong_bit_depth_colour_type_and_size_are_named() {
 
     // A first frame of the wrong size is caught at open time.
     let f0 = seq.frames()[0].clone();
-    write_raw_png(
-        &f0.rgb,
-        &[1u8; 8 * 12],
-        8,
-        12,
-        png::ColorType::Grayscale,
-        png::BitDepth::Eight,
-    );
+    write_raw_png(&f0.rgb, &[1u8; 8 * 12], 8, 12, ExtendedColorType::L8);
     let msg = open_err(tmp.path());
     assert!(
         msg.contains(&*f0.rgb.to_string_lossy()) && msg.contains("8x12"),

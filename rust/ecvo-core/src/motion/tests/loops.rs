@@ -299,42 +299,6 @@ fn poses_match_the_per_point_loops() {
 /// colour and depth images of its lists (paired by index, close enough for a
 /// test). `None` (SKIPPING printed) when the dataset is absent, a failure when
 /// `ECVO_REQUIRE_DATASETS=1`.
-/// The samples of a PNG, decoded by the `png` crate (16-bit ones big-endian), and its
-/// colour type.
-fn decode_png(path: &std::path::Path) -> (Vec<u8>, png::ColorType, png::BitDepth) {
-    let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
-    let mut reader = png::Decoder::new(file).read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    buf.truncate(info.buffer_size());
-    (buf, info.color_type, info.bit_depth)
-}
-
-/// An 8-bit gray or RGB PNG as gray: RGB converted with the `image` crate's sRGB luma
-/// (`(2126 R + 7152 G + 722 B) / 10000`, truncated), which this test used before.
-fn luma8(path: &std::path::Path) -> Vec<u8> {
-    match decode_png(path) {
-        (g, png::ColorType::Grayscale, png::BitDepth::Eight) => g,
-        (rgb, png::ColorType::Rgb, png::BitDepth::Eight) => rgb
-            .chunks_exact(3)
-            .map(|p| {
-                ((2126 * u32::from(p[0]) + 7152 * u32::from(p[1]) + 722 * u32::from(p[2])) / 10000)
-                    as u8
-            })
-            .collect(),
-        (_, ct, bits) => panic!("{}: {ct:?} {bits:?}", path.display()),
-    }
-}
-
-/// A 16-bit gray PNG's samples.
-fn luma16(path: &std::path::Path) -> Vec<u16> {
-    let (b, ct, bits) = decode_png(path);
-    assert!(ct == png::ColorType::Grayscale && bits == png::BitDepth::Sixteen);
-    b.chunks_exact(2)
-        .map(|s| u16::from_be_bytes([s[0], s[1]]))
-        .collect()
-}
-
 struct Recorded {
     dir: std::path::PathBuf,
     camera: Camera,
@@ -403,15 +367,19 @@ impl Recorded {
 
     /// Frame `i` prepared with `cfg`.
     fn prepared(&self, i: usize, cfg: &Config) -> PreparedFrame {
-        let intensity = luma8(&self.dir.join(&self.rgb[i]));
-        let depth = luma16(&self.dir.join(&self.depth[i]));
+        let intensity = image::open(self.dir.join(&self.rgb[i]))
+            .unwrap()
+            .into_luma8();
+        let depth = image::open(self.dir.join(&self.depth[i]))
+            .unwrap()
+            .into_luma16();
         let mut out = PreparedFrame::default();
         Preparer::new(cfg)
             .prepare_into(
                 crate::FrameView {
                     timestamp: i as f64,
-                    intensity: &intensity,
-                    depth: &depth,
+                    intensity: intensity.as_raw(),
+                    depth: depth.as_raw(),
                 },
                 &mut out,
             )

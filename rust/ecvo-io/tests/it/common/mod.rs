@@ -64,21 +64,7 @@ pub fn test_images(width: usize, height: usize, seed: u64) -> (Vec<u8>, Vec<u16>
     (intensity, depth)
 }
 
-/// Writes a PNG with the `png` crate in any layout (to make bad inputs); `bytes` are the
-/// samples as PNG stores them (16-bit ones big-endian).
-pub fn write_raw_png(
-    path: &Path,
-    bytes: &[u8],
-    w: u32,
-    h: u32,
-    ct: png::ColorType,
-    bits: png::BitDepth,
-) {
-    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
-    let mut encoder = png::Encoder::new(file, w, h);
-    encoder.set_color(ct);
-    encoder.set_depth(bits);
-    let mut writer = encoder.write_header().unwrap();
-    writer.write_image_data(bytes).unwrap();
-    writer.finish().unwrap();
+/// Writes a PNG with the `image` crate in any layout (to make bad inputs).
+pub fn write_raw_png(path: &Path, bytes: &[u8], w: u32, h: u32, ct: image::ExtendedColorType) {
+    image::save_buffer_with_format(path, bytes, w, h, ct, image::ImageFormat::Png).unwrap();
 }
