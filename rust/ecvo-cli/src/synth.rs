@@ -172,6 +172,7 @@ pub fn synth_command(
     noise: Noise,
     start_time: f64,
     motion: &MotionArgs,
+    with_imu: bool,
 ) -> Result<()> {
     if frames < 2 {
         bail!("--frames must be at least 2, got {frames}");
@@ -209,8 +210,28 @@ pub fn synth_command(
     }
     writer.write_groundtruth(&gt)?;
     let n = writer.finish()?;
+    let imu = if with_imu {
+        // The IMU over the frames' span and 0.1 s either side, on the written clock.
+        let model = ecvo_synth::imu::ImuModel::phone(seed);
+        let last = seq.timestamp(frames - 1);
+        let readings = model.simulate(|t| seq.path.pose_at(t), -0.1, last + 0.1);
+        crate::imu::write_readings(
+            &out.join(ecvo_io::imu::IMU_FILE),
+            &readings,
+            start_time,
+            &model,
+            &format!("ecvo synth, seed {seed}"),
+        )?;
+        ecvo_io::imu::save_imu_calibration(
+            out.join(ecvo_io::camera::CAMERA_FILE),
+            &crate::imu::calibration_of(&model),
+        )?;
+        format!(", simulated IMU at {} Hz", model.rate_hz)
+    } else {
+        String::new()
+    };
     outln!(
-        "wrote {n} frames ({}x{}, depth in 1/{} m, noise {noise:?}, motion {:?}, seed {seed}) to {}",
+        "wrote {n} frames ({}x{}, depth in 1/{} m, noise {noise:?}, motion {:?}, seed {seed}{imu}) to {}",
         camera.width,
         camera.height,
         camera.depth_scale,
