@@ -46,6 +46,9 @@ pub enum Motion {
     /// A far-depth hand-held orbit panning round a hall's walls
     /// (`CameraPath::far_orbit` in `Scene::hall`).
     Orbit,
+    /// A fast in-place pan round a hall's walls, the pan rate swinging between 0 and
+    /// --max-rot-speed (`CameraPath::in_place_pan`).
+    Pan,
 }
 
 /// The image size and camera of `ecvo synth --size`.
@@ -106,7 +109,7 @@ impl MotionArgs {
                     ("--max-speed", self.max_speed.is_some()),
                 ] {
                     if given {
-                        bail!("{flag} needs --motion fast or orbit");
+                        bail!("{flag} needs --motion fast, orbit or pan");
                     }
                 }
                 Ok(SynthSequence::phone_320x180(frames, seed))
@@ -131,6 +134,26 @@ impl MotionArgs {
                 }
                 Ok(SynthSequence::fast_handheld_320x180(
                     frames, seed, depth, w, v,
+                ))
+            }
+            Motion::Pan => {
+                if self.max_speed.is_some() {
+                    bail!("--max-speed needs --motion fast");
+                }
+                let depth = self.depth.unwrap_or(2.5);
+                let (lo, hi) = ORBIT_DEPTH_RANGE_M;
+                if !(lo..=hi).contains(&depth) {
+                    bail!("--depth must be between {lo} and {hi} m with --motion pan, got {depth}");
+                }
+                let w = self.max_rot_speed_deg.unwrap_or(120.0);
+                if !(w > 0.0 && w <= 360.0) {
+                    bail!("--max-rot-speed must be in (0, 360] deg/s with --motion pan, got {w}");
+                }
+                Ok(SynthSequence::pan_320x180(
+                    frames,
+                    seed,
+                    depth,
+                    w.to_radians(),
                 ))
             }
             Motion::Orbit => {
