@@ -145,14 +145,20 @@ pub fn from_groundtruth(seq: &Path, out: &Path, seed: u64, knot: f64) -> Result<
     let Some(spline) = SplinePath::fit(&gt.stamps, &gt.poses, knot) else {
         bail!("{}: too few poses for a spline", shown_path(&gt_path));
     };
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let (seq_real, out_real) = (seq.canonicalize()?, out.canonicalize()?);
-    if out_real.starts_with(&seq_real) {
+    // Checked before anything is created: the nearest existing ancestor of `out`,
+    // resolved, must not lie inside the sequence folder.
+    let seq_real = seq
+        .canonicalize()
+        .with_context(|| format!("{}", seq.display()))?;
+    let abs = std::path::absolute(out)?;
+    let existing = abs.ancestors().find(|p| p.exists()).unwrap_or(&abs);
+    if existing.canonicalize()?.starts_with(&seq_real) {
         bail!(
             "--out {} is inside the sequence folder; write it elsewhere",
             out.display()
         );
     }
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let model = ImuModel::phone(seed);
     let (lo, hi) = spline.span();
     // Relative times keep the differences exact; the stamps are shifted back.

@@ -43,6 +43,8 @@ pub struct TrackSettings {
     pub max_memory: Option<usize>,
     /// Which IMU stream to use.
     pub imu: crate::imu::ImuSource,
+    /// Fuse the gyro's rotation into each registration (`Config::imu_fusion`).
+    pub imu_fusion: bool,
 }
 
 /// The engine's method: ecvo's defaults, or the paper's as written, with single

@@ -45,6 +45,10 @@ pub(crate) struct TrackArgs {
     /// Ignore the sequence's imu.txt: track without the gyroscope.
     #[arg(help_heading = "Input", display_order = 7, long)]
     pub(crate) no_imu: bool,
+    /// With a gyroscope: fuse its rotation into each frame-to-frame registration,
+    /// weighed by the two covariances, besides starting the registration from it.
+    #[arg(help_heading = "Tuning", display_order = 39, long)]
+    pub(crate) imu_fusion: bool,
     /// Thresholds and filter angles: the paper's PC (Table 1) or phone (Table 2) values.
     #[arg(help_heading = "Method", display_order = 10, long, value_enum, default_value_t = PresetArg::Pc)]
     pub(crate) preset: PresetArg,
@@ -288,6 +292,7 @@ impl TrackArgs {
             strict: self.strict,
             allow_outside: self.allow_outside,
             max_memory: limits.max_memory,
+            imu_fusion: self.imu_fusion,
             imu: match (&self.imu, self.no_imu) {
                 (_, true) => crate::imu::ImuSource::Off,
                 (Some(p), false) => crate::imu::ImuSource::File(p.clone()),

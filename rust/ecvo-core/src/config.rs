@@ -408,6 +408,11 @@ pub struct Config {
     /// ([`crate::Odometry::push_imu`]; `camera.json`'s `imu` object). Unused without
     /// samples. By default aligned with the camera and on the frames' clock.
     pub imu: ImuCalibration,
+    /// With a gyroscope: fuse each believed frame-to-frame registration with the
+    /// gyro's rotation over the frame's interval, each weighed by its covariance
+    /// ([`crate::imu::Gyro::fuse`]), instead of seeding the registration only. Off by
+    /// default (`docs/imu.md`).
+    pub imu_fusion: bool,
 }
 
 impl Config {
@@ -484,6 +489,7 @@ impl Config {
             min_anchor_texture_fraction: 0.02,
             memory_budget: DEFAULT_MEMORY_BUDGET,
             imu: ImuCalibration::default(),
+            imu_fusion: false,
         }
     }
 

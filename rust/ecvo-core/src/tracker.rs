@@ -393,6 +393,12 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
                 self.correcting.depth_noise = m;
                 self.counters.noise_refits += 1;
             }
+            // With a gyro: its rotation fused in (`Config::imu_fusion`), its bias
+            // learnt from the visual motion.
+            if let Some(m) = self.gyro_step(index, &moved, &reg) {
+                moved = m;
+                registered = se3::compose(&prev.pose, &m);
+            }
             // A velocity only from consecutive frames: after a lost frame, [A] spans
             // the gap and the next prediction starts afresh from the identity (which is
             // also what the pipeline's filter stage can know without the tracker).
@@ -401,8 +407,6 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
                 motion: moved,
                 dt: frame.timestamp - prev.frame.timestamp,
             });
-            self.gyro
-                .learn(index, &moved, &reg.information, &mut self.counters.imu);
             registered
         } else {
             self.velocity = None;

@@ -35,11 +35,12 @@ def test_push_imu_tracks_as_ecvo_run_does(pan, cli, tmp_path):
         gyro_noise_density=cal["gyro_noise_density"],
         gyro_bias_random_walk=cal["gyro_bias_random_walk"],
     )
-    # As ecvo run feeds them: every sample up to 5 ms after the frame.
-    frames_clock = imu[:, 0] + cal["time_offset"]
+    # As ecvo run feeds them (ecvo_io::imu::ImuFeed): every sample stamped up to
+    # 5 ms after the frame, the limit computed in the same order on the IMU's clock.
     done = 0
     for t, grey, depth in seq:
-        upto = int(np.searchsorted(frames_clock, t + 0.005, side="right"))
+        limit = t + 0.005 - cal["time_offset"]
+        upto = int(np.searchsorted(imu[:, 0], limit, side="right"))
         tracker.push_imu(imu[done:upto, 0], imu[done:upto, 1:4])
         done = upto
         tracker.push(t, grey, depth)

@@ -169,3 +169,70 @@ impl Gyro {
         }
     }
 }
+
+/// The least standard deviation granted to the gyro's rotation over a frame
+/// interval, radians (0.03°): what its calibration (rotation, time offset, scale)
+/// leaves besides the white noise and the bias.
+pub const MIN_GYRO_SIGMA_RAD: f64 = 5e-4;
+
+impl Gyro {
+    /// With [`crate::Config::imu_fusion`]: frame `index`'s registration `T_{c,p}`
+    /// (`moved`, with its information matrix) fused with the gyro's rotation over the
+    /// interval, each weighed by its covariance (the registration's inflated as for
+    /// the bias; the gyro's from its white noise, the bias estimate's spread and
+    /// [`MIN_GYRO_SIGMA_RAD`]): a Kalman update of the pose by a rotation
+    /// measurement, in the left tangent of the registration's `T_{p,c}` (the
+    /// translation follows through the cross-covariance). `None` without a gyro prior
+    /// for the frame or a usable covariance.
+    pub fn fuse(&self, index: u64, moved: &Pose, information: &Matrix6<f64>) -> Option<Pose> {
+        let p = self.pending.filter(|p| p.index == index)?;
+        let cov = information.try_inverse()? * VISUAL_COVARIANCE_INFLATION;
+        let nd = self.calibration.noise_density();
+        let bias_var = self.bias.covariance.trace() / 3.0;
+        let var = (nd * nd * p.dt + bias_var * p.dt * p.dt).max(MIN_GYRO_SIGMA_RAD.powi(2));
+        // The estimator's T = moved⁻¹, perturbed on the left; the gyro says its
+        // rotation is p.rotation⁻¹.
+        let t = moved.inverse();
+        let omega = (t.rotation * p.rotation).scaled_axis();
+        let s = cov.fixed_view::<3, 3>(3, 3) + nalgebra::Matrix3::identity() * var;
+        let gain = cov.fixed_view::<6, 3>(0, 3) * s.try_inverse()?;
+        let xi = gain * (-omega);
+        let fused = crate::se3::compose(&crate::se3::exp(&xi), &t).inverse();
+        crate::se3::is_finite(&fused).then_some(fused)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Translation3;
+
+    /// A registration 1° off the gyro's rotation, with a rotation covariance far wider
+    /// than the gyro's, is pulled onto the gyro's rotation; one far more certain is
+    /// left nearly where it is.
+    #[test]
+    fn fusion_weighs_the_registration_against_the_gyro() {
+        let mut g = Gyro::new(ImuCalibration::default());
+        let mut c = ImuCounters::default();
+        let w = [0.0, 2.0, 0.0];
+        let samples: Vec<GyroSample> = (0..40)
+            .map(|k| GyroSample {
+                t: k as f64 * 0.005,
+                w,
+            })
+            .collect();
+        g.push(&samples, &mut c).unwrap();
+        let truth = UnitQuaternion::from_scaled_axis(Vector3::new(0.0, 0.1, 0.0));
+        let cv = Pose::from_parts(Translation3::new(0.01, 0.0, 0.0), Default::default());
+        g.prior(1, 0.05, 0.1, Some(&cv), &mut c).unwrap();
+        let off = UnitQuaternion::from_scaled_axis(Vector3::new(1f64.to_radians(), 0.0, 0.0));
+        let moved = Pose::from_parts(Translation3::new(0.01, 0.0, 0.0), off * truth);
+        let loose = Matrix6::identity() * 1e3;
+        let fused = g.fuse(1, &moved, &loose).unwrap();
+        assert!(fused.rotation.angle_to(&truth) < 0.05f64.to_radians());
+        let tight = Matrix6::identity() * 1e12;
+        let kept = g.fuse(1, &moved, &tight).unwrap();
+        assert!(kept.rotation.angle_to(&moved.rotation) < 0.01f64.to_radians());
+        assert!(g.fuse(2, &moved, &loose).is_none(), "no prior for frame 2");
+    }
+}

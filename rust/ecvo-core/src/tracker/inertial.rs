@@ -19,6 +19,26 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         self.gyro.push(samples, &mut self.counters.imu)
     }
 
+    /// After frame `index`'s believed registration `reg`, by which the camera moved
+    /// `moved` from the previous frame: with [`crate::Config::imu_fusion`], that
+    /// motion fused with the gyro's rotation ([`Gyro::fuse`]); and the bias learnt
+    /// from the visual motion ([`Gyro::learn`]).
+    pub(super) fn gyro_step(
+        &mut self,
+        index: u64,
+        moved: &Pose,
+        reg: &crate::motion::MotionResult,
+    ) -> Option<Pose> {
+        let fused = if self.config.imu_fusion {
+            self.gyro.fuse(index, moved, &reg.information)
+        } else {
+            None
+        };
+        self.gyro
+            .learn(index, moved, &reg.information, &mut self.counters.imu);
+        fused
+    }
+
     /// Counts `n` samples lost before they reached the tracker (the pipeline's inbox
     /// overflowed).
     pub fn count_imu_dropped(&mut self, n: u64) {
