@@ -45,10 +45,6 @@ pub(crate) struct TrackArgs {
     /// Ignore the sequence's imu.txt: track without the gyroscope.
     #[arg(help_heading = "Input", display_order = 7, long)]
     pub(crate) no_imu: bool,
-    /// With a gyroscope: fuse its rotation into each frame-to-frame registration,
-    /// weighed by the two covariances, besides starting the registration from it.
-    #[arg(help_heading = "Tuning", display_order = 39, long)]
-    pub(crate) imu_fusion: bool,
     /// Thresholds and filter angles: the paper's PC (Table 1) or phone (Table 2) values.
     #[arg(help_heading = "Method", display_order = 10, long, value_enum, default_value_t = PresetArg::Pc)]
     pub(crate) preset: PresetArg,
@@ -88,6 +84,10 @@ pub(crate) struct TrackArgs {
     /// with the identity tried too).
     #[arg(help_heading = "Tuning", display_order = 24, long, value_enum)]
     pub(crate) prior: Option<PriorArg>,
+    /// With a gyroscope: fuse its rotation into each frame-to-frame registration,
+    /// weighed by the two covariances, besides starting the registration from it.
+    #[arg(help_heading = "Tuning", display_order = 39, long)]
+    pub(crate) imu_fusion: bool,
     /// What an accepted correction does to the frame-to-frame chain: fuse (weighed by
     /// their covariances) or replace (the paper's).
     #[arg(help_heading = "Tuning", display_order = 25, long, value_enum)]
