@@ -30,7 +30,7 @@ mod gyro;
 pub mod integrate;
 mod ring;
 
-pub use gyro::Gyro;
+pub use gyro::{Gyro, MIN_GYRO_SIGMA_RAD};
 pub use integrate::{Coverage, integrate};
 pub use ring::GyroRing;
 
