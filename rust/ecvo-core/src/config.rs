@@ -2,6 +2,7 @@
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
+use crate::imu::ImuCalibration;
 
 mod schedule;
 mod validate;
@@ -278,6 +279,13 @@ pub struct MotionConfig {
     /// nothing, and the photometric term would pull the warp toward the current
     /// frame's dark pixels. 0 keeps the photometric term always.
     pub depth_only_texture_fraction: f64,
+    /// When `MOTION` starts from several guesses, compare them at the coarsest step
+    /// with the last guess's scale instead of the first's. The tracker sets it for
+    /// an \[A\] whose last start is the gyroscope's prior ([`crate::imu`]): on a fast
+    /// pan the identity's scale, fitted to a misregistration, is so wide that the
+    /// identity wins against the right motion, whose template points partly leave
+    /// the image. Off by default (the identity's scale).
+    pub scale_from_last_start: bool,
 }
 
 impl MotionConfig {
@@ -399,6 +407,15 @@ pub struct Config {
     /// settings that need more ([`crate::Error::MemoryBudget`]).
     /// [`crate::DEFAULT_MEMORY_BUDGET`] (512 MiB) by default.
     pub memory_budget: usize,
+    /// How the IMU sits against the camera, if samples are pushed
+    /// ([`crate::Odometry::push_imu`]; `camera.json`'s `imu` object). Unused without
+    /// samples. By default aligned with the camera and on the frames' clock.
+    pub imu: ImuCalibration,
+    /// With a gyroscope: fuse each believed frame-to-frame registration with the
+    /// gyro's rotation over the frame's interval, each weighed by its covariance
+    /// ([`crate::imu::Gyro::fuse`]), instead of seeding the registration only. Off by
+    /// default (`docs/imu.md`).
+    pub imu_fusion: bool,
 }
 
 impl Config {
@@ -457,6 +474,7 @@ impl Config {
                 max_intensity_sigma: 0.2,
                 max_depth_sigma_m: 0.05,
                 depth_only_texture_fraction: 0.02,
+                scale_from_last_start: false,
             },
             reference_levels: levels[..used].to_vec(),
             max_lost_frames: 10,
@@ -474,6 +492,8 @@ impl Config {
             min_anchor_depth_fraction: 0.05,
             min_anchor_texture_fraction: 0.02,
             memory_budget: DEFAULT_MEMORY_BUDGET,
+            imu: ImuCalibration::default(),
+            imu_fusion: false,
         }
     }
 

@@ -10,6 +10,7 @@ mod common;
 mod hostile_input;
 mod output;
 mod real_data;
+mod synth_imu;
 mod synth_motion;
 mod synth_orbit;
 mod synth_stream;
