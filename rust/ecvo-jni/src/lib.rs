@@ -7,7 +7,7 @@
 //!
 //! ## The native methods
 //!
-//! The 16 `@JvmStatic external fun` of `NativeBridge.kt` are declared once each with
+//! The 17 `@JvmStatic external fun` of `NativeBridge.kt` are declared once each with
 //! jni 0.22's `native_method!` (see [`NATIVE_METHODS`]): the macro checks at compile
 //! time that each Rust implementation matches the JNI signature written next to it,
 //! and exports it under its short JNI name (`Java_io_ecvo_NativeBridge_nativeInit`,

@@ -44,6 +44,13 @@ internal object NativeBridge {
     /** Writes the latest pose (4x4 column-major, camera to world) into out[0..16]; returns its timestamp or Long.MIN_VALUE. */
     @JvmStatic external fun nativeGetPose(handle: Long, out: FloatArray?): Long
 
+    /**
+     * Writes the latest frame, its pose and its registration's quality into
+     * out[0..FrameQuality.SIZE] (layout at [FrameQuality.SIZE]); returns its timestamp or
+     * Long.MIN_VALUE, as [nativeGetPose].
+     */
+    @JvmStatic external fun nativeFrameQuality(handle: Long, out: DoubleArray?): Long
+
     /** The tracking state code: 0 initialising, 1 tracking, 2 lost. */
     @JvmStatic external fun nativeState(handle: Long): Int
 

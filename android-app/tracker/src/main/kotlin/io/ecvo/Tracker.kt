@@ -155,6 +155,24 @@ class Tracker(val config: TrackerConfig) : PoseTracker {
      */
     override fun getPose(out: FloatArray): Long = withHandle { h -> NativeBridge.nativeGetPose(h, out) }
 
+    /**
+     * Writes the latest tracked frame with the quality of its registration into
+     * `out[0..FrameQuality.SIZE]` (layout at [FrameQuality.SIZE]: index, state, lost
+     * reason, pose, the 6x6 information matrix, residual scale, points used) and returns
+     * its timestamp in nanoseconds, or [NO_POSE] (leaving [out] untouched) before the
+     * first frame is tracked. Allocates nothing: a caller polling every frame reuses
+     * [out]. The pose and the figures are of the same frame. Only the latest frame is
+     * kept: a caller that polls less often than frames are tracked sees a gap in
+     * `out[0]`, the frame index.
+     */
+    fun frameQuality(out: DoubleArray): Long = withHandle { h -> NativeBridge.nativeFrameQuality(h, out) }
+
+    /** The latest tracked frame with its quality (see the overload above), or null before the first. */
+    fun frameQuality(): FrameQuality? {
+        val a = DoubleArray(FrameQuality.SIZE)
+        return if (frameQuality(a) == NO_POSE) null else FrameQuality.fromArray(a)
+    }
+
     /** The current tracking state. */
     override val state: TrackingState get() = withHandle { h -> TrackingState.fromCode(NativeBridge.nativeState(h)) }
 

@@ -142,6 +142,7 @@ class TrackerApiTest {
             "nativePushStrided" to listOf(J, J, ByteBuffer::class.java, I, ByteBuffer::class.java, I),
             "nativePushArrays" to listOf(J, J, ShortArray::class.java, ByteArray::class.java),
             "nativeGetPose" to listOf(J, FloatArray::class.java),
+            "nativeFrameQuality" to listOf(J, DoubleArray::class.java),
             "nativeState" to listOf(J),
             "nativeFlush" to listOf(J),
             "nativeSetIntrinsics" to listOf(J, D, D, D, D),
