@@ -2,6 +2,7 @@
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
+use crate::imu::ImuCalibration;
 
 mod schedule;
 mod validate;
@@ -396,6 +397,10 @@ pub struct Config {
     /// settings that need more ([`crate::Error::MemoryBudget`]).
     /// [`crate::DEFAULT_MEMORY_BUDGET`] (512 MiB) by default.
     pub memory_budget: usize,
+    /// How the IMU sits against the camera, if samples are pushed
+    /// ([`crate::Odometry::push_imu`]; `camera.json`'s `imu` object). Unused without
+    /// samples. By default aligned with the camera and on the frames' clock.
+    pub imu: ImuCalibration,
 }
 
 impl Config {
@@ -470,6 +475,7 @@ impl Config {
             min_anchor_depth_fraction: 0.05,
             min_anchor_texture_fraction: 0.02,
             memory_budget: DEFAULT_MEMORY_BUDGET,
+            imu: ImuCalibration::default(),
         }
     }
 

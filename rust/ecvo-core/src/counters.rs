@@ -1,6 +1,8 @@
 //! The tracker's counters: the paper's Table 1 (motion estimations, reference frames
 //! per level) and what went wrong or was done besides.
 
+use crate::imu::ImuCounters;
+
 /// The counters of the paper's Table 1, and what went wrong.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Counters {
@@ -60,4 +62,6 @@ pub struct Counters {
     pub keyframe_fusions: u64,
     /// Times the fitted depth-noise model ([`crate::DepthNoiseModel::Fitted`]) changed.
     pub noise_refits: u64,
+    /// The IMU's samples and priors ([`crate::imu`]); all zero without one.
+    pub imu: ImuCounters,
 }

@@ -28,6 +28,10 @@ pub enum Error {
     /// A frame does not match the camera it is meant for.
     #[error("bad frame: {0}")]
     BadFrame(String),
+    /// A batch of IMU samples with a non-finite value ([`crate::imu`]); none of the
+    /// batch was taken.
+    #[error("bad IMU sample: {0}")]
+    BadImuSample(String),
 }
 
 /// Result with the core's error.

@@ -12,6 +12,7 @@
 //! - [`motion`]: `MOTION(Fi, Fj, Tinit)`, dense photometric and depth alignment by
 //!   iteratively re-weighted Gauss-Newton with t-distribution weights.
 //! - [`tracker`]: adaptive multi-level pose error correction (Figure 1(b)).
+//! - [`imu`]: the gyroscope's rotation prior for \[A\] and its bias estimate.
 //! - [`se3`]: the exponential and logarithm of SE(3).
 
 pub mod camera;
@@ -19,6 +20,7 @@ pub mod config;
 pub mod correction;
 pub mod counters;
 pub mod error;
+pub mod imu;
 pub mod lost;
 pub mod memory;
 pub mod motion;
@@ -39,6 +41,7 @@ pub use config::{
     SCHEDULE_SHIFT_SIDE, Schedule, Weighting, parse_point_budget, parse_schedule,
 };
 pub use error::{Error, Result};
+pub use imu::{GyroSample, ImuCalibration};
 pub use lost::LostReason;
 pub use memory::{DEFAULT_MEMORY_BUDGET, MemoryEstimate};
 pub use motion::{MotionEstimator, MotionResult};

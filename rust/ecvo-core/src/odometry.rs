@@ -7,6 +7,7 @@ use crate::Pose;
 use crate::camera::{Camera, FrameView};
 use crate::config::Config;
 use crate::error::Result;
+use crate::imu::GyroSample;
 use crate::prepare::{PreparedFrame, Preparer};
 use crate::tracker::{FrameOutput, Tracker};
 
@@ -56,6 +57,13 @@ impl Odometry {
     /// the previous frame ([`Tracker::set_guess`]).
     pub fn set_guess(&mut self, motion: Pose) {
         self.tracker.set_guess(motion);
+    }
+
+    /// Takes gyroscope samples, in time order, for the frames pushed after this call
+    /// ([`Tracker::push_imu`], [`crate::imu`]): fails, taking none, on a batch with a
+    /// non-finite value; drops and counts a sample not after the last one taken.
+    pub fn push_imu(&mut self, samples: &[GyroSample]) -> Result<()> {
+        self.tracker.push_imu(samples)
     }
 
     /// Prepares the frames from the next one on with new intrinsics of the same image

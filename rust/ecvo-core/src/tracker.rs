@@ -20,6 +20,7 @@ pub use crate::correction::correction_distance;
 use crate::correction::{chain_step, fuse_correction};
 pub use crate::counters::Counters;
 use crate::error::Result;
+use crate::imu::Gyro;
 pub use crate::lost::LostReason;
 use crate::motion::{MotionEstimator, MotionResult};
 use crate::noise::NoiseFit;
@@ -30,6 +31,7 @@ use crate::spread::SpreadWatch;
 
 mod belief;
 mod frame_to_frame;
+mod inertial;
 use belief::{believable, plausible_speed};
 mod keyframe;
 mod output;
@@ -101,6 +103,8 @@ pub struct Tracker<F> {
     /// An outside guess of the next frame's motion from the previous frame
     /// ([`Tracker::set_guess`]), used once in place of the prediction.
     guess: Option<Pose>,
+    /// The IMU's samples and bias estimate ([`crate::imu`], [`Tracker::push_imu`]).
+    gyro: Gyro,
 }
 
 /// Makes `frame` ready to be registered against: finishes its reference side when it
@@ -141,6 +145,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             keyframe_chain: None,
             finisher: crate::prepare::lookup_depth(&config).map(|_| Preparer::whole(&config)),
             guess: None,
+            gyro: Gyro::new(config.imu),
             config,
         })
     }
@@ -266,7 +271,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             self.state = TrackingState::Tracking;
             return out;
         }
-        let prior = guess.or_else(|| self.prior_for(frame.timestamp));
+        let prior = guess.or_else(|| self.motion_prior(index, frame.timestamp));
         let Some(prev) = self.prev.clone() else {
             unreachable!("checked above")
         };
@@ -396,6 +401,8 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
                 motion: moved,
                 dt: frame.timestamp - prev.frame.timestamp,
             });
+            self.gyro
+                .learn(index, &moved, &reg.information, &mut self.counters.imu);
             registered
         } else {
             self.velocity = None;

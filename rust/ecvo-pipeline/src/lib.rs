@@ -72,6 +72,7 @@
 
 mod chain;
 mod geometry;
+mod imu;
 mod pool;
 mod poselog;
 mod push;
@@ -95,6 +96,7 @@ use ecvo_core::{
 };
 
 pub use geometry::{CloudPoint, GeometryOptions};
+pub use imu::IMU_INBOX_CAPACITY;
 pub use pool::PooledFrame;
 pub use stats::{PipelineStats, PoolStats, QueueStats, StageStats};
 pub use types::*;
@@ -277,6 +279,7 @@ impl Pipeline {
                 tracked_at: Instant::now(),
             }),
             counters: Mutex::new(tracker.counters().clone()),
+            imu: Mutex::new(imu::ImuInbox::default()),
             poses: Mutex::new(PoseLog::new(options.trajectory_window)),
             cloud: options.geometry.map(|g| Mutex::new(Cloud::new(g))),
             timers: Timers::default(),

@@ -33,6 +33,8 @@ pub(crate) struct FrameMeta {
     pub filtered_in: Duration,
     /// The same as CPU time of the compute thread.
     pub filtered_cpu: Duration,
+    /// IMU samples pushed before the frame.
+    pub imu_upto: u64,
 }
 
 /// `frame_to_frame(this frame, the frame of sequence `against`, prior)`, computed
@@ -151,6 +153,7 @@ impl FramePool {
                         ahead: None,
                         filtered_in: Duration::ZERO,
                         filtered_cpu: Duration::ZERO,
+                        imu_upto: 0,
                     },
                 })
             })

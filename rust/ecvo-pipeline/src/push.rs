@@ -97,6 +97,7 @@ impl Pipeline {
         raw.timestamp = timestamp;
         raw.pushed_at = pushed_at;
         raw.sequence = s.next_sequence.fetch_add(1, Ordering::Relaxed);
+        raw.imu_upto = lock(&s.imu).ring.pushed();
         {
             let mut p = lock(&s.progress);
             p.pushed += 1;

@@ -12,6 +12,8 @@ pub(crate) struct RawFrame {
     pub(crate) depth: Vec<u16>,
     /// The intrinsics in force when it was pushed ([`crate::Pipeline::set_intrinsics`]).
     pub(crate) camera: Camera,
+    /// IMU samples pushed before it ([`crate::Pipeline::push_imu`]).
+    pub(crate) imu_upto: u64,
 }
 
 pub(crate) struct RawPool {
@@ -45,6 +47,7 @@ impl RawFrame {
             intensity: vec![0; camera.pixels()],
             depth: vec![0; camera.pixels()],
             camera,
+            imu_upto: 0,
         }
     }
 }
@@ -127,6 +130,8 @@ pub(crate) struct Shared {
     /// `DepthNoiseModel::Fitted`): \[A\] computed ahead must use it.
     pub(crate) depth_noise: Mutex<ecvo_core::DepthNoiseModel>,
     pub(crate) counters: Mutex<Counters>,
+    /// IMU samples pushed and not yet known to be read ([`crate::Pipeline::push_imu`]).
+    pub(crate) imu: Mutex<crate::imu::ImuInbox>,
     /// The kept poses and reference records (`keep_trajectory`).
     pub(crate) poses: Mutex<PoseLog>,
     pub(crate) cloud: Option<Mutex<Cloud>>,

@@ -67,8 +67,20 @@ pub(crate) fn filter_stage(
                 (Ok(()), Some(prev)) => {
                     let published = *lock(&s.velocity);
                     let offline = s.admission == Admission::Offline;
-                    let known =
-                        chain.prior(config, prev, prepared.timestamp, behind, offline, published);
+                    // With an IMU the prior depends on the tracker's bias estimate.
+                    let imu = lock(&s.imu).ring.pushed() > 0;
+                    let known = (!imu)
+                        .then(|| {
+                            chain.prior(
+                                config,
+                                prev,
+                                prepared.timestamp,
+                                behind,
+                                offline,
+                                published,
+                            )
+                        })
+                        .flatten();
                     known.map(|prior| {
                         let (t1, c1) = (Instant::now(), thread_cpu());
                         motion.depth_noise = *lock(&s.depth_noise);
@@ -100,6 +112,7 @@ pub(crate) fn filter_stage(
             ahead,
             filtered_in,
             filtered_cpu,
+            imu_upto: raw.imu_upto,
         };
         // [A] computed ahead is the tracker's work: the filter's figure leaves it out and
         // the tracker stage books it with the frame, used or discarded.
@@ -141,6 +154,8 @@ pub(crate) fn tracker_stage(
     outputs: Option<Sender<TrackedFrame>>,
 ) {
     let all_levels = s.levels.min(u8::MAX as usize) as u8;
+    // IMU samples handed to the tracker so far.
+    let mut imu_fed = 0u64;
     while let Some(frame) = s.prepared.pop() {
         if s.aborted() {
             break;
@@ -149,6 +164,7 @@ pub(crate) fn tracker_stage(
         s.hook(Stage::Tracker, meta.sequence);
         let for_geometry = s.geometry.is_some().then(|| frame.clone());
         let mut used_ahead = false;
+        crate::imu::feed(s, &mut tracker, &mut imu_fed, meta.imu_upto);
         let (out, tracked_in, tracked_cpu) = compute.install(|| {
             let (t0, c0) = (Instant::now(), thread_cpu());
             let out = tracker.track_with(frame, |prev, prior, noise| {

@@ -243,6 +243,7 @@ pub(crate) fn copy_counters(dst: &mut Counters, src: &Counters) {
         keyframe_spread_refusals,
         keyframe_fusions,
         noise_refits,
+        imu,
     } = src;
     dst.frames = *frames;
     dst.motion_estimations = *motion_estimations;
@@ -263,6 +264,7 @@ pub(crate) fn copy_counters(dst: &mut Counters, src: &Counters) {
     dst.keyframe_spread_refusals = *keyframe_spread_refusals;
     dst.keyframe_fusions = *keyframe_fusions;
     dst.noise_refits = *noise_refits;
+    dst.imu = *imu;
 }
 
 #[cfg(test)]

@@ -8,6 +8,7 @@ impl Config {
     pub fn validate(&self) -> Result<()> {
         let bad = |field: &'static str, why: String| Err(Error::InvalidConfig { field, why });
         self.camera.validate()?;
+        self.imu.validate()?;
         let f = &self.filter;
         if let Some(b) = f.bilateral {
             if b.radius == 0 || b.radius > 8 {

@@ -1,0 +1,43 @@
+//! The tracker's side of the IMU ([`crate::imu`]): taking samples, and the prior of
+//! \[A\] (the gyro's, else the constant-velocity prediction).
+
+use std::ops::Deref;
+
+use super::Tracker;
+use crate::Pose;
+use crate::error::Result;
+use crate::imu::{Gyro, GyroSample};
+use crate::prepare::PreparedFrame;
+
+impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
+    /// Takes gyroscope samples, in time order, for the frames tracked after this
+    /// call ([`crate::imu`]): a batch with a non-finite value is refused whole
+    /// ([`crate::Error::BadImuSample`]); a sample not after the last one taken is
+    /// dropped and counted (`Counters::imu.refused`). Samples that come too late for
+    /// a frame leave it tracked without the IMU, counted, never an error.
+    pub fn push_imu(&mut self, samples: &[GyroSample]) -> Result<()> {
+        self.gyro.push(samples, &mut self.counters.imu)
+    }
+
+    /// Counts `n` samples lost before they reached the tracker (the pipeline's inbox
+    /// overflowed).
+    pub fn count_imu_dropped(&mut self, n: u64) {
+        self.counters.imu.dropped += n;
+    }
+
+    /// The IMU's state: samples kept, calibration, bias estimate.
+    pub fn gyro(&self) -> &Gyro {
+        &self.gyro
+    }
+
+    /// What frame `index`, stamped `timestamp`, starts \[A\] from besides the
+    /// identity: the gyro's rotation over its interval with the constant-velocity
+    /// translation, or without IMU cover the constant-velocity prediction alone.
+    pub(super) fn motion_prior(&mut self, index: u64, timestamp: f64) -> Option<Pose> {
+        let cv = self.prior_for(timestamp);
+        let prev = self.prev.as_ref()?.frame.timestamp;
+        self.gyro
+            .prior(index, prev, timestamp, cv.as_ref(), &mut self.counters.imu)
+            .or(cv)
+    }
+}
