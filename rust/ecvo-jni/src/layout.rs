@@ -20,7 +20,7 @@ pub const TRAJECTORY_WINDOW: usize = 32_768;
 pub const REFERENCE_STRIDE: usize = 9;
 
 /// Doubles in `nativeStats` (`TrackerStats.SIZE`).
-pub const STATS_SIZE: usize = 15;
+pub const STATS_SIZE: usize = 21;
 
 /// Doubles in `nativeFrameQuality` (`FrameQuality.SIZE`; layout in [`quality_doubles`]).
 pub const QUALITY_SIZE: usize = 53;
@@ -140,7 +140,8 @@ pub fn pose_doubles(r: &PoseRecord) -> [f64; POSE_STRIDE] {
     [r.timestamp, t.x, t.y, t.z, q.i, q.j, q.k, q.w]
 }
 
-/// The 15 doubles of `nativeStats` (layout in `TrackerStats.kt`).
+/// The 21 doubles of `nativeStats` (layout in `TrackerStats.kt`; 15..21 are the IMU's
+/// counters, `Counters::imu`).
 pub fn stats_doubles(s: &PipelineStats) -> [f64; STATS_SIZE] {
     let c = &s.counters;
     let level = |i: usize| c.references.get(i).copied().unwrap_or(0) as f64;
@@ -160,6 +161,12 @@ pub fn stats_doubles(s: &PipelineStats) -> [f64; STATS_SIZE] {
         s.latency.mean_ms,
         s.wall_ms_per_frame,
         s.poses_discarded as f64,
+        c.imu.samples as f64,
+        c.imu.refused as f64,
+        c.imu.dropped as f64,
+        c.imu.priors as f64,
+        c.imu.late as f64,
+        c.imu.missing as f64,
     ]
 }
 

@@ -8,6 +8,7 @@ use jni::{Env, NativeMethod};
 use crate::config::InitArgs;
 use crate::error::{Failure, bad, run};
 use crate::frames::{PlaneLayout, array_len, copy_plane, direct};
+use crate::imu::{native_push_imu, native_push_imu_batch};
 use crate::layout::{
     NO_POSE, QUALITY_SIZE, REFERENCE_STRIDE, cloud_floats, pose_doubles, pose_matrix,
     quality_doubles, state_code, stats_doubles,
@@ -57,6 +58,10 @@ bridge! {
         fn native_push_arrays(handle: jlong, timestamp_ns: jlong, depth: [jshort], intensity: [jbyte]) -> jint;
     NATIVE_GET_POSE = "Java_io_ecvo_NativeBridge_nativeGetPose",
         fn native_get_pose(handle: jlong, out: [jfloat]) -> jlong;
+    NATIVE_PUSH_IMU = "Java_io_ecvo_NativeBridge_nativePushImu",
+        fn native_push_imu(handle: jlong, timestamp_ns: jlong, wx: jdouble, wy: jdouble, wz: jdouble);
+    NATIVE_PUSH_IMU_BATCH = "Java_io_ecvo_NativeBridge_nativePushImuBatch",
+        fn native_push_imu_batch(handle: jlong, timestamps_ns: [jlong], rates: [jfloat], count: jint);
     NATIVE_FRAME_QUALITY = "Java_io_ecvo_NativeBridge_nativeFrameQuality",
         fn native_frame_quality(handle: jlong, out: [jdouble]) -> jlong;
     NATIVE_STATE = "Java_io_ecvo_NativeBridge_nativeState",
