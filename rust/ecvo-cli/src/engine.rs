@@ -90,6 +90,8 @@ impl CloudFrames {
 /// How to run the engine over a sequence.
 #[derive(Clone, Debug)]
 pub struct EngineOptions {
+    /// Gyroscope samples pushed beside the frames ([`crate::imu::ImuFeed`]).
+    pub imu: Option<crate::imu::ImuStream>,
     /// Track only the first this many frames (all if `None`).
     pub max_frames: Option<usize>,
     /// Compute threads of the pipeline (1..=256).
@@ -292,6 +294,7 @@ pub fn track_sequence(
     let (lo, hi) = valid_raw_depth(config);
     let mut warned_depth = false;
     let mut reader = sequence.reader(Some(n), PREFETCH);
+    let mut imu = opts.imu.as_ref().map(crate::imu::ImuFeed::new);
     // Not a `for` loop: the reader is also used inside to recycle frames.
     #[allow(clippy::while_let_on_iterator)]
     while let Some(item) = reader.next() {
@@ -314,6 +317,11 @@ pub fn track_sequence(
                     c.depth_scale
                 );
             }
+        }
+        if let Some(f) = &mut imu {
+            pipeline
+                .push_imu(f.before(frame.timestamp))
+                .context("pushing IMU samples")?;
         }
         match pipeline.push_view(frame.view()) {
             Ok(PushStatus::Repeated) => {

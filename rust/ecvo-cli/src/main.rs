@@ -27,6 +27,7 @@ macro_rules! outln {
 }
 
 mod engine;
+mod imu;
 mod outputs;
 mod plot;
 mod run;
@@ -320,6 +321,29 @@ enum Command {
         /// 640x480 (fx = fy = 525, depth in 1/5000 m) seeing the same scene and path.
         #[arg(long, value_enum, default_value_t = Size::Phone320x180)]
         size: Size,
+        /// Do not write imu.txt (a simulated phone IMU riding on the camera: gyro and
+        /// accelerometer at 200-400 Hz with datasheet noise and bias, its rotation
+        /// and time offset in camera.json).
+        #[arg(long)]
+        no_imu: bool,
+    },
+    /// Make a SIMULATED imu.txt for a real sequence from its groundtruth.txt: a smooth
+    /// spline through the poses, its derivatives, then a phone IMU's noise, bias,
+    /// camera-IMU rotation and time offset. Writes imu.txt and a camera.json with
+    /// the calibration into --out (outside the sequence folder); track with `ecvo run
+    /// SEQ --imu OUT/imu.txt`.
+    ImuFromGroundtruth {
+        /// Sequence folder with groundtruth.txt and camera.json.
+        seq: PathBuf,
+        /// Output folder (not inside the sequence folder).
+        #[arg(long)]
+        out: PathBuf,
+        /// Seed of the IMU's rate, rotation, offset, bias and noise.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Spacing of the spline's control poses, seconds.
+        #[arg(long, default_value_t = imu::GROUNDTRUTH_KNOT_S)]
+        knot: f64,
     },
 }
 
@@ -425,6 +449,7 @@ fn dispatch(command: Command) -> Result<()> {
             max_speed,
             texture_contrast,
             size,
+            no_imu,
         } => synth::synth_command(
             &out,
             frames,
@@ -439,7 +464,14 @@ fn dispatch(command: Command) -> Result<()> {
                 texture_contrast,
                 size,
             },
+            !no_imu,
         ),
+        Command::ImuFromGroundtruth {
+            seq,
+            out,
+            seed,
+            knot,
+        } => imu::from_groundtruth(&seq, &out, seed, knot),
     }
 }
 

@@ -90,6 +90,9 @@ pub(crate) fn summary_json(
     summary["refinements"] = json!(c.refinements);
     summary["refused_refinements"] = json!(c.refused_refinements);
     summary["noise_refits"] = json!(c.noise_refits);
+    if let Some(s) = &t.imu {
+        summary["imu"] = crate::imu::report(s, &c.imu).1;
+    }
     summary["depth_noise_in_use"] = depth_noise_json(t.run.stats.depth_noise);
     summary["frames_account"] = account(t, settings).1;
     // `ground_truth` means an ATE was computed; these say whether the sequence had a
@@ -147,6 +150,9 @@ pub(crate) fn human_summary(seq: &Path, t: &Tracked, s: &StageStats, out: &Path)
         c.frames,
         levels_string(&t.config.reference_levels)
     );
+    if let Some(s) = &t.imu {
+        let _ = writeln!(r, "{}", crate::imu::report(s, &c.imu).0);
+    }
     match &t.eval.ate {
         Some(a) => {
             let _ = writeln!(

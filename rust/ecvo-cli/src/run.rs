@@ -164,6 +164,8 @@ pub struct Tracked {
     pub config: Config,
     /// The engine's results.
     pub run: TrackRun,
+    /// The IMU stream used, if any.
+    pub imu: Option<crate::imu::ImuStream>,
     /// The estimated trajectory (every frame).
     pub trajectory: Trajectory,
     /// Comparison with the ground truth, if the sequence has one.
@@ -178,8 +180,13 @@ pub fn track(
     cloud_stride: usize,
 ) -> Result<Tracked> {
     let sequence = settings.open_sequence(seq)?;
-    let config = settings.config(*sequence.camera())?;
+    let mut config = settings.config(*sequence.camera())?;
+    let imu = crate::imu::load_stream(seq, &settings.imu)?;
+    if let Some(s) = &imu {
+        config.imu = s.calibration;
+    }
     let opts = EngineOptions {
+        imu: imu.clone(),
         max_frames: settings.max_frames,
         threads: settings.threads,
         progress: std::io::stderr().is_terminal(),
@@ -203,6 +210,7 @@ pub fn track(
         sequence,
         config,
         run,
+        imu,
         trajectory,
         eval,
     })

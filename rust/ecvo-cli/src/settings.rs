@@ -41,6 +41,8 @@ pub struct TrackSettings {
     pub allow_outside: bool,
     /// The memory budget in bytes (`None`: the engine's default).
     pub max_memory: Option<usize>,
+    /// Which IMU stream to use.
+    pub imu: crate::imu::ImuSource,
 }
 
 /// The engine's method: ecvo's defaults, or the paper's as written, with single

@@ -46,6 +46,9 @@ pub enum Motion {
     /// A far-depth hand-held orbit panning round a hall's walls
     /// (`CameraPath::far_orbit` in `Scene::hall`).
     Orbit,
+    /// A fast in-place pan round a hall's walls, the pan rate swinging between 0 and
+    /// --max-rot-speed (`CameraPath::in_place_pan`).
+    Pan,
 }
 
 /// The image size and camera of `ecvo synth --size`.
@@ -106,7 +109,7 @@ impl MotionArgs {
                     ("--max-speed", self.max_speed.is_some()),
                 ] {
                     if given {
-                        bail!("{flag} needs --motion fast or orbit");
+                        bail!("{flag} needs --motion fast, orbit or pan");
                     }
                 }
                 Ok(SynthSequence::phone_320x180(frames, seed))
@@ -131,6 +134,26 @@ impl MotionArgs {
                 }
                 Ok(SynthSequence::fast_handheld_320x180(
                     frames, seed, depth, w, v,
+                ))
+            }
+            Motion::Pan => {
+                if self.max_speed.is_some() {
+                    bail!("--max-speed needs --motion fast");
+                }
+                let depth = self.depth.unwrap_or(2.5);
+                let (lo, hi) = ORBIT_DEPTH_RANGE_M;
+                if !(lo..=hi).contains(&depth) {
+                    bail!("--depth must be between {lo} and {hi} m with --motion pan, got {depth}");
+                }
+                let w = self.max_rot_speed_deg.unwrap_or(120.0);
+                if !(w > 0.0 && w <= 360.0) {
+                    bail!("--max-rot-speed must be in (0, 360] deg/s with --motion pan, got {w}");
+                }
+                Ok(SynthSequence::pan_320x180(
+                    frames,
+                    seed,
+                    depth,
+                    w.to_radians(),
                 ))
             }
             Motion::Orbit => {
@@ -172,6 +195,7 @@ pub fn synth_command(
     noise: Noise,
     start_time: f64,
     motion: &MotionArgs,
+    with_imu: bool,
 ) -> Result<()> {
     if frames < 2 {
         bail!("--frames must be at least 2, got {frames}");
@@ -209,8 +233,28 @@ pub fn synth_command(
     }
     writer.write_groundtruth(&gt)?;
     let n = writer.finish()?;
+    let imu = if with_imu {
+        // The IMU over the frames' span and 0.1 s either side, on the written clock.
+        let model = ecvo_synth::imu::ImuModel::phone(seed);
+        let last = seq.timestamp(frames - 1);
+        let readings = model.simulate(|t| seq.path.pose_at(t), -0.1, last + 0.1);
+        crate::imu::write_readings(
+            &out.join(ecvo_io::imu::IMU_FILE),
+            &readings,
+            start_time,
+            &model,
+            &format!("ecvo synth, seed {seed}"),
+        )?;
+        ecvo_io::imu::save_imu_calibration(
+            out.join(ecvo_io::camera::CAMERA_FILE),
+            &crate::imu::calibration_of(&model),
+        )?;
+        format!(", simulated IMU at {} Hz", model.rate_hz)
+    } else {
+        String::new()
+    };
     outln!(
-        "wrote {n} frames ({}x{}, depth in 1/{} m, noise {noise:?}, motion {:?}, seed {seed}) to {}",
+        "wrote {n} frames ({}x{}, depth in 1/{} m, noise {noise:?}, motion {:?}, seed {seed}{imu}) to {}",
         camera.width,
         camera.height,
         camera.depth_scale,

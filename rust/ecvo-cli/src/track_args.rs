@@ -32,6 +32,19 @@ pub(crate) struct TrackArgs {
     /// symlinks out); refused by default.
     #[arg(help_heading = "Input", display_order = 5, long)]
     pub(crate) allow_outside: bool,
+    /// Use this imu.txt (gyroscope samples, `docs/imu.md`) instead of the sequence's;
+    /// its calibration is the `imu` object of the camera.json beside it, else of the
+    /// sequence's.
+    #[arg(
+        help_heading = "Input",
+        display_order = 6,
+        long,
+        conflicts_with = "no_imu"
+    )]
+    pub(crate) imu: Option<PathBuf>,
+    /// Ignore the sequence's imu.txt: track without the gyroscope.
+    #[arg(help_heading = "Input", display_order = 7, long)]
+    pub(crate) no_imu: bool,
     /// Thresholds and filter angles: the paper's PC (Table 1) or phone (Table 2) values.
     #[arg(help_heading = "Method", display_order = 10, long, value_enum, default_value_t = PresetArg::Pc)]
     pub(crate) preset: PresetArg,
@@ -275,6 +288,11 @@ impl TrackArgs {
             strict: self.strict,
             allow_outside: self.allow_outside,
             max_memory: limits.max_memory,
+            imu: match (&self.imu, self.no_imu) {
+                (_, true) => crate::imu::ImuSource::Off,
+                (Some(p), false) => crate::imu::ImuSource::File(p.clone()),
+                (None, false) => crate::imu::ImuSource::Auto,
+            },
         }
     }
 }

@@ -275,6 +275,13 @@ pub struct MotionConfig {
     /// add nothing to the normal equations, and their spread is not checked against
     /// `max_intensity_sigma` (a black or dark frame, the lights off, with depth).
     pub depth_only_texture_fraction: f64,
+    /// When `MOTION` starts from several guesses, compare them at the coarsest step
+    /// with the last guess's scale instead of the first's. The tracker sets it for
+    /// an \[A\] whose last start is the gyroscope's prior ([`crate::imu`]): on a fast
+    /// pan the identity's scale, fitted to a misregistration, is so wide that the
+    /// identity wins against the right motion, whose template points partly leave
+    /// the image. Off by default (the identity's scale).
+    pub scale_from_last_start: bool,
 }
 
 impl MotionConfig {
@@ -459,6 +466,7 @@ impl Config {
                 max_intensity_sigma: 0.2,
                 max_depth_sigma_m: 0.05,
                 depth_only_texture_fraction: 0.02,
+                scale_from_last_start: false,
             },
             reference_levels: levels[..used].to_vec(),
             max_lost_frames: 10,

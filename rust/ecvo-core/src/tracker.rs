@@ -271,7 +271,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             self.state = TrackingState::Tracking;
             return out;
         }
-        let prior = guess.or_else(|| self.motion_prior(index, frame.timestamp));
+        let prior = self.motion_prior(guess, index, frame.timestamp);
         let Some(prev) = self.prev.clone() else {
             unreachable!("checked above")
         };

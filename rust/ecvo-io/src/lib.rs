@@ -6,6 +6,7 @@
 //!   frame by frame or streamed by a background reader ([`FrameReader`]).
 //! - [`SequenceWriter`]: recorded streams (the TUM layout plus `camera.json`).
 //! - [`camera`]: `camera.json` files and the benchmark camera presets.
+//! - [`imu`]: `imu.txt` IMU streams and the IMU calibration of `camera.json`.
 //! - [`Trajectory`]: TUM trajectory files (`timestamp tx ty tz qx qy qz qw`).
 //! - [`eval`]: ATE and RPE as the TUM tools and evo compute them.
 //! - [`write_ply`]: binary PLY point clouds.
@@ -24,6 +25,7 @@ pub mod derive;
 pub mod error;
 pub mod eval;
 pub mod files;
+pub mod imu;
 mod list;
 pub mod ply;
 pub mod png;

@@ -11,6 +11,8 @@
 //! * [`CameraPath`]: smooth analytic trajectories (orbit, slow hand-held walk, fast
 //!   hand-held shaking and panning at a chosen depth, a far-depth hand-held orbit
 //!   panning round [`Scene::hall`]).
+//! * [`imu`]: simulated IMUs (gyroscope and accelerometer with a phone's noise, bias,
+//!   rotation and time offset) on any trajectory, and a smooth spline through sampled poses.
 //! * [`SynthSequence`]: everything together, frame by frame
 //!   ([`SynthSequence::phone_320x180`], [`SynthSequence::fast_320x180`],
 //!   [`SynthSequence::orbit_320x180`]).
@@ -18,6 +20,7 @@
 //! Pure and deterministic: no I/O, no threads, no global state.
 
 mod camera;
+pub mod imu;
 mod noise;
 mod orbit;
 mod path;

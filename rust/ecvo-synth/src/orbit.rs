@@ -208,3 +208,63 @@ impl SynthSequence {
         }
     }
 }
+
+impl CameraPath {
+    /// A fast in-place pan (issue 47) in [`Scene::hall`]`(_, depth)`: the camera
+    /// stands at the hall's centre at 1.5 m height and pans round its walls, its pan
+    /// rate swinging between 0 and `max_angular_speed` (rad/s) every
+    /// [`crate::FAST_PERIOD_S`] / 2 (pan, slow to a halt, pan again: the
+    /// accelerations a constant-velocity prediction misses), with a hand's small
+    /// tilt and roll wobble (0.02 and 0.01 rad) and a 5 mm sway. Direction, start
+    /// and wobble from `seed`.
+    ///
+    /// # Panics
+    /// If `depth` is outside [`ORBIT_DEPTH_RANGE_M`] or the speed is not positive.
+    pub fn in_place_pan(seed: u64, depth: f64, max_angular_speed: f64) -> Self {
+        let (lo, hi) = ORBIT_DEPTH_RANGE_M;
+        assert!(
+            (lo..=hi).contains(&depth),
+            "in_place_pan: depth {depth} m outside {lo}–{hi} m"
+        );
+        assert!(max_angular_speed > 0.0 && max_angular_speed.is_finite());
+        let mut rng = Rng::new(seed ^ 0x9A40_0000_0000_0047);
+        let f = fast_harmonic;
+        let direction = rng.sign();
+        let angle0 = rng.angle();
+        // The pan rate: half the peak, plus a swing of half the peak (two cycles a
+        // period), so that it goes from 0 to the peak and back.
+        let mut swing = f(&mut rng, 1.0, 2, 2);
+        swing.amplitude = 0.5 * max_angular_speed / swing.omega;
+        let sway = |rng: &mut Rng| vec![f(rng, 0.005, 1, 3)];
+        let position = [sway(&mut rng), sway(&mut rng), sway(&mut rng)];
+        let tilt = vec![f(&mut rng, 0.02 * depth, 1, 3)];
+        let roll = vec![f(&mut rng, 0.01, 1, 3)];
+        Self {
+            orbit_centre: Point3::origin(),
+            radius_x: 0.0,
+            radius_y: 0.0,
+            angle0,
+            angular_rate: direction * 0.5 * max_angular_speed,
+            angle_wobble: scaled(&[swing], direction),
+            height: ORBIT_HEIGHT_M,
+            position_wobble: position,
+            target: Point3::new(0.0, 0.0, ORBIT_TARGET_HEIGHT_M),
+            target_wobble: [Vec::new(), Vec::new(), tilt],
+            roll,
+            look_outward: Some(depth),
+        }
+    }
+}
+
+impl SynthSequence {
+    /// [`Self::phone_320x180`] with a fast in-place pan: [`Scene::hall`] and
+    /// [`CameraPath::in_place_pan`] at viewing distance `depth` (metres) and peak pan
+    /// rate `max_angular_speed` (rad/s), both from `seed`.
+    pub fn pan_320x180(frames: usize, seed: u64, depth: f64, max_angular_speed: f64) -> Self {
+        Self {
+            scene: Scene::hall(seed, depth),
+            path: CameraPath::in_place_pan(seed, depth, max_angular_speed),
+            ..Self::phone_320x180(frames, seed)
+        }
+    }
+}

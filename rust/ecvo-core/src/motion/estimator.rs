@@ -285,8 +285,16 @@ fn best_start<K: Loops>(
         ));
     }
     let outs = slots.iter().flatten();
-    // A common scale: the first guess's (the identity's, for [A]).
-    let Some(common) = outs.clone().find_map(|o| o.scale) else {
+    // A common scale: the first guess's (the identity's, for [A]), or with
+    // `scale_from_last_start` the last one's (a trusted prior's: a wrong start's wide
+    // scale would flatter it, and out-of-view points, which a large true motion
+    // has, count as the worst outliers).
+    let common = if cfg.scale_from_last_start {
+        outs.clone().filter_map(|o| o.scale).last()
+    } else {
+        outs.clone().find_map(|o| o.scale)
+    };
+    let Some(common) = common else {
         return (0, slots[0].expect("at least one start"));
     };
     let wh = p.whitener(&common);

@@ -31,13 +31,27 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
     }
 
     /// What frame `index`, stamped `timestamp`, starts \[A\] from besides the
-    /// identity: the gyro's rotation over its interval with the constant-velocity
-    /// translation, or without IMU cover the constant-velocity prediction alone.
-    pub(super) fn motion_prior(&mut self, index: u64, timestamp: f64) -> Option<Pose> {
+    /// identity: an outside `guess` ([`Tracker::set_guess`]), else the gyro's
+    /// rotation over its interval with the constant-velocity translation, else
+    /// (without IMU cover) the constant-velocity prediction alone.
+    pub(super) fn motion_prior(
+        &mut self,
+        guess: Option<Pose>,
+        index: u64,
+        timestamp: f64,
+    ) -> Option<Pose> {
+        self.motion.scale_from_last_start = false;
+        if guess.is_some() {
+            return guess;
+        }
         let cv = self.prior_for(timestamp);
         let prev = self.prev.as_ref()?.frame.timestamp;
-        self.gyro
-            .prior(index, prev, timestamp, cv.as_ref(), &mut self.counters.imu)
-            .or(cv)
+        let gyro = self
+            .gyro
+            .prior(index, prev, timestamp, cv.as_ref(), &mut self.counters.imu);
+        // The gyro's prior is trusted at the coarsest step: it is compared with the
+        // identity at its own scale.
+        self.motion.scale_from_last_start = gyro.is_some();
+        gyro.or(cv)
     }
 }

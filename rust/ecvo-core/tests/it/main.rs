@@ -8,6 +8,7 @@
 mod basin;
 mod common;
 mod frame_quality;
+mod imu;
 mod keyframes;
 mod motion;
 mod properties;
