@@ -12,14 +12,15 @@ import kotlin.math.sin
  *
  * ```
  * "imu": {"camera_from_imu": [[r00, r01, r02], [r10, r11, r12], [r20, r21, r22]],
- *         "time_offset": 0.0, "clock": "realtime", "gyro_noise_density": 0.00012}
+ *         "time_offset": 0.0, "gyro_noise_density": 0.00012}
  * ```
  *
  * - `camera_from_imu`: the rotation R (rows) taking a vector in the IMU's axes to the
  *   camera's (x right, y down, z forward): `ω_camera = R ω_imu`.
  * - `time_offset`: seconds, `t_frames = t_imu + time_offset`. The app writes `imu.txt`
- *   already on the frames' clock, so it writes 0; `clock` (read by the app only) says
- *   how that clock was matched ([CameraClock.Method]).
+ *   already on the frames' clock, so it writes 0; how that clock was matched ([clock],
+ *   [CameraClock.Method]) goes to `metadata.json` (`imu_clock`): ecvo-io refuses keys
+ *   it does not know in this object.
  * - `gyro_noise_density` (rad/s/√Hz) and `gyro_bias_random_walk` (rad/s/√s), left out
  *   when not known.
  */
@@ -28,7 +29,7 @@ class ImuCalibration(
     val rotationCameraImu: DoubleArray,
     /** Seconds added to an IMU timestamp to put it on the frames' clock. */
     val timeOffsetS: Double = 0.0,
-    /** How the IMU's clock was put on the frames' ([CameraClock.Method] name), or null. */
+    /** How the IMU's clock was put on the frames' ([CameraClock.Method] name), or null; not part of `camera.json`. */
     val clock: String? = null,
     /** Gyroscope white noise, rad/s/√Hz, if known. */
     val gyroNoiseDensity: Double? = null,
@@ -57,7 +58,6 @@ class ImuCalibration(
             append(']')
         }
         append("], \"time_offset\": ").append(Timestamps.plain(timeOffsetS))
-        clock?.let { append(", \"clock\": \"").append(it).append('"') }
         gyroNoiseDensity?.let { append(", \"gyro_noise_density\": ").append(Timestamps.plain(it)) }
         gyroBiasRandomWalk?.let { append(", \"gyro_bias_random_walk\": ").append(Timestamps.plain(it)) }
         append('}')
@@ -130,7 +130,7 @@ class ImuCalibration(
                 else -> throw IOException("$source: imu.$k is not a number")
             }
             return try {
-                ImuCalibration(r, num("time_offset") ?: 0.0, imu["clock"] as? String, num("gyro_noise_density"), num("gyro_bias_random_walk"))
+                ImuCalibration(r, num("time_offset") ?: 0.0, null, num("gyro_noise_density"), num("gyro_bias_random_walk"))
             } catch (e: IllegalArgumentException) {
                 throw IOException("$source: imu.${e.message}")
             }

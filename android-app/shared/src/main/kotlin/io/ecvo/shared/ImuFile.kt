@@ -51,14 +51,14 @@ object ImuFile {
     const val HEADER: String = "# imu: gyroscope (rad/s) in the IMU's axes, timestamps on the frames' clock\n" +
         "# file: 'ecvo recording'\n# timestamp wx wy wz\n"
 
-    /** Largest `imu.txt` read: 128 MiB, about 50 minutes at 500 Hz with an accelerometer. */
-    const val MAX_BYTES: Long = 128L shl 20
+    /** Largest `imu.txt` read: 64 MiB, about half an hour at 400 Hz (ecvo-io's `MAX_IMU_BYTES`). */
+    const val MAX_BYTES: Long = 64L shl 20
 
-    /** Largest angular rate read (rad/s): phone gyroscopes saturate at about 35 (2000 °/s). */
-    const val MAX_RATE_RAD_S: Double = 1000.0
+    /** Largest angular rate read (rad/s): phone gyroscopes saturate at about 35 (2000 °/s); as ecvo-io. */
+    const val MAX_RATE_RAD_S: Double = 100.0
 
-    /** Largest acceleration read (m/s²): phone accelerometers saturate at about 160 (16 g). */
-    const val MAX_ACCEL_M_S2: Double = 10_000.0
+    /** Largest acceleration read (m/s²): phone accelerometers saturate at about 160 (16 g); as ecvo-io. */
+    const val MAX_ACCEL_M_S2: Double = 1000.0
 
     /** Longest line read (characters), so that a file without newlines cannot fill memory. */
     const val MAX_LINE_CHARS: Int = 4096
