@@ -17,9 +17,9 @@ targets=("$@")
 out=fuzz/results.md
 # A run of some targets only writes its own table, not over the summary of all of them.
 [ ${#targets[@]} -gt 0 ] && out="fuzz/artifacts/results-$(IFS=-; echo "${targets[*]}").md"
-[ ${#targets[@]} -eq 0 ] && targets=(io_png io_text levels prepare_motion jni_args depth16)
+[ ${#targets[@]} -eq 0 ] && targets=(io_png io_text io_imu levels prepare_motion jni_args depth16)
 
-declare -A max_len=([io_png]=16384 [io_text]=4096 [levels]=256 [prepare_motion]=40000 [jni_args]=256 [depth16]=86402)
+declare -A max_len=([io_png]=16384 [io_text]=4096 [io_imu]=4096 [levels]=256 [prepare_motion]=40000 [jni_args]=256 [depth16]=86402)
 
 [ -d fuzz/corpus ] || python3 scripts/fuzz/seeds.py
 nice -n 19 cargo +nightly fuzz build || exit 1

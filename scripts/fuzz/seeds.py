@@ -131,6 +131,12 @@ def main():
     write("io_text", "list_escape", b"\x01" + b"1 ../outside.png\n2 /etc/passwd\n")
     write("io_text", "list_bom", b"\x01" + "\ufeff1 rgb/1.png\n".encode())
 
+    # --- imu.txt (even first byte) and camera.json's imu object (odd).
+    imu = "\n".join(f"{1.0 + i / 200:.6f} 0.1 -0.2 {0.3 + i / 100:.4f} 0 0 9.81" for i in range(12))
+    write("io_imu", "imu.txt", b"\x00# simulated\n" + imu.encode())
+    write("io_imu", "gyro_only", b"\x00" + b"1 0 0 1\n1.005 0 0 1\n1.5 0 0 1\n")
+    write("io_imu", "calibration", b"\x01" + b'{"width": 8, "imu": {"camera_from_imu": [[1,0,0],[0,1,0],[0,0,1]], "time_offset": 0.01}}')
+
     # --- --levels
     for k, s in enumerate(["30mm:7deg,120mm:12deg", "0.03m:3deg,70mm:7deg", "none", "", " 1e-3 m : 1.5e1 deg "]):
         write("levels", f"levels{k}", s.encode())

@@ -39,7 +39,7 @@ render() {
     local name=$1
     shift
     rm -rf "${out:?}/$name"
-    "$ecvo" synth --out "$out/$name" --frames "$frames" --seed "$seed" "$@" > /dev/null
+    "$ecvo" synth --out "$out/$name" --no-imu --frames "$frames" --seed "$seed" "$@" > /dev/null
     echo "$out/$name" >> "$out/suite.txt"
 }
 start=$(date +%s.%N)

@@ -36,7 +36,7 @@ for noise in $noises; do
     for depth in $depths; do
         dir=$out/fast_${noise}_${depth}m
         rm -rf "$dir"
-        "$ecvo" synth --out "$dir" --motion fast --depth "$depth" --noise "$noise" \
+        "$ecvo" synth --out "$dir" --no-imu --motion fast --depth "$depth" --noise "$noise" \
             --frames "$frames" --seed "$seed"
         echo "$dir" >> "$out/suite.txt"
     done

@@ -31,7 +31,7 @@ render() {
     local name=$1
     shift
     rm -rf "${out:?}/$name"
-    "$ecvo" synth --out "$out/$name" --frames 150 --seed 3 "$@" > /dev/null
+    "$ecvo" synth --out "$out/$name" --no-imu --frames 150 --seed 3 "$@" > /dev/null
     echo "$out/$name" >> "$out/suite.txt"
 }
 for c in 1 0.2 0.05 0.02; do

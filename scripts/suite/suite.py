@@ -35,7 +35,8 @@ METRICS = [("drift_trans_m_per_s", "drift trans"), ("drift_rot_deg_per_s", "drif
 # group -> (subfolder of the suite, script that renders it, frame steps, required)
 RENDERED = [("fast", "synth", "make-synth-suite.sh", (1, 2), True),
             ("weak", "weak", "make-weak-texture.sh", (1,), True),
-            ("noise", "noise", "make-noise-suite.sh", (1,), False)]
+            ("noise", "noise", "make-noise-suite.sh", (1,), False),
+            ("pan", "pan", "make-pan-suite.sh", (1, 2, 3, 4), False)]
 REAL = [("tum_fr1_xyz_half", (1, 2, 3, 4)), ("tum_fr1_desk_half", (1, 2, 3, 4)),
         ("tum_fr1_xyz_full300", (1, 2, 3, 4))]
 
@@ -524,7 +525,7 @@ def main(argv=None):
     q.add_argument("flags", nargs=argparse.REMAINDER, help="-- then ecvo run flags")
     q.set_defaults(func=cmd_run)
 
-    q = sub.add_parser("render", help="render the synthetic groups into SUITE/{synth,weak,noise}")
+    q = sub.add_parser("render", help="render the synthetic groups into SUITE/{synth,weak,noise,pan}")
     common(q)
     q.add_argument("--keep-existing", action="store_true",
                    help="also leave alone a group with a suite.txt but no mark of a finished "

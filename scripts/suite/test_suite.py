@@ -267,7 +267,7 @@ class CellsTest(unittest.TestCase):
             self.assertEqual(groups.count("real"), 12)
             self.assertEqual(groups.count("fast"), 2)  # steps 1 and 2
             self.assertEqual([(m["group"], m["required"]) for m in missing],
-                             [("weak", True), ("noise", False)])
+                             [("weak", True), ("noise", False), ("pan", False)])
 
 
 if __name__ == "__main__":

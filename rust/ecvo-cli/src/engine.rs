@@ -294,7 +294,10 @@ pub fn track_sequence(
     let (lo, hi) = valid_raw_depth(config);
     let mut warned_depth = false;
     let mut reader = sequence.reader(Some(n), PREFETCH);
-    let mut imu = opts.imu.as_ref().map(crate::imu::ImuFeed::new);
+    let mut imu = opts
+        .imu
+        .as_ref()
+        .map(|s| ecvo_io::imu::ImuFeed::new(s.samples.to_vec(), s.calibration.time_offset));
     // Not a `for` loop: the reader is also used inside to recycle frames.
     #[allow(clippy::while_let_on_iterator)]
     while let Some(item) = reader.next() {

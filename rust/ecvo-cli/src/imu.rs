@@ -11,7 +11,7 @@ use ecvo_core::{GyroSample, ImuCalibration};
 use ecvo_io::Trajectory;
 use ecvo_io::camera::CAMERA_FILE as CAMERA_FILE_NAME;
 use ecvo_io::files::shown_path;
-use ecvo_io::imu::{IMU_FILE, ImuSample, load_imu, load_imu_calibration, save_imu};
+use ecvo_io::imu::{IMU_FILE, ImuSample, load_imu, save_imu};
 use ecvo_synth::imu::{ImuModel, ImuReading, SplinePath};
 
 /// Which IMU stream a run uses.
@@ -39,11 +39,6 @@ pub struct ImuStream {
     pub calibration_from: String,
 }
 
-/// Samples stamped up to this long after a frame (on the frames' clock) are pushed
-/// before it: what a live pusher has by the time the frame arrives, and enough for
-/// the integration to interpolate the frame's end.
-pub const FEED_AHEAD_S: f64 = 0.005;
-
 /// The stream `source` names for the sequence in `dir`, and its calibration: the
 /// `imu` object of the `camera.json` beside the `imu.txt`, else of the sequence's,
 /// else the default (an IMU aligned with the camera and on its clock, with a
@@ -68,19 +63,12 @@ pub fn load_stream(dir: &Path, source: &ImuSource) -> Result<Option<ImuStream>> 
             shown_path(&path)
         );
     }
-    let beside = path.parent().map(|p| p.join(CAMERA_FILE_NAME));
-    let mut calibration = None;
-    let mut from = String::from("default (aligned with the camera, on its clock)");
-    for cam in beside.into_iter().chain([dir.join(CAMERA_FILE_NAME)]) {
-        if cam.exists()
-            && let Some(c) = load_imu_calibration(&cam)?
-        {
-            calibration = Some(c);
-            from = shown_path(&cam);
-            break;
-        }
-    }
-    let calibration = calibration.unwrap_or_else(|| {
+    let found = ecvo_io::imu::find_calibration(&path, dir)?;
+    let from = found.as_ref().map_or_else(
+        || String::from("default (aligned with the camera, on its clock)"),
+        |(_, p)| shown_path(p),
+    );
+    let calibration = found.map(|(c, _)| c).unwrap_or_else(|| {
         log::warn!(
             "{}: no `imu` object in camera.json; assuming an IMU aligned with the camera \
              and on its clock",
@@ -94,35 +82,6 @@ pub fn load_stream(dir: &Path, source: &ImuSource) -> Result<Option<ImuStream>> 
         path,
         calibration_from: from,
     }))
-}
-
-/// Feeds a stream's samples beside the frames: before each frame, every sample not
-/// yet pushed and stamped up to [`FEED_AHEAD_S`] after it.
-pub struct ImuFeed {
-    samples: Arc<[GyroSample]>,
-    offset: f64,
-    next: usize,
-}
-
-impl ImuFeed {
-    /// A feed of `stream`.
-    pub fn new(stream: &ImuStream) -> Self {
-        ImuFeed {
-            samples: stream.samples.clone(),
-            offset: stream.calibration.time_offset,
-            next: 0,
-        }
-    }
-
-    /// The samples to push before a frame stamped `t` (frames' clock).
-    pub fn before(&mut self, t: f64) -> &[GyroSample] {
-        let start = self.next;
-        let limit = t + FEED_AHEAD_S - self.offset;
-        while self.next < self.samples.len() && self.samples[self.next].t <= limit {
-            self.next += 1;
-        }
-        &self.samples[start..self.next]
-    }
 }
 
 /// The calibration of a simulated IMU, as `camera.json` carries it.

@@ -142,6 +142,63 @@ pub fn save_imu(path: impl AsRef<Path>, samples: &[ImuSample], comment: &str) ->
     w.flush().map_err(io)
 }
 
+/// Samples stamped up to this long after a frame (on the frames' clock) are pushed
+/// before it by [`ImuFeed`]: what a live pusher has by the time the frame arrives,
+/// and enough for the integration to interpolate the frame's end.
+pub const FEED_AHEAD_S: f64 = 0.005;
+
+/// Replays an IMU stream beside a sequence's frames, as `ecvo run` does: before each
+/// frame, every sample not yet pushed and stamped up to [`FEED_AHEAD_S`] after it.
+#[derive(Clone, Debug)]
+pub struct ImuFeed {
+    samples: Vec<GyroSample>,
+    offset: f64,
+    next: usize,
+}
+
+impl ImuFeed {
+    /// A feed of `samples` whose clock is `time_offset` behind the frames'
+    /// ([`ImuCalibration::time_offset`]).
+    pub fn new(samples: Vec<GyroSample>, time_offset: f64) -> Self {
+        ImuFeed {
+            samples,
+            offset: time_offset,
+            next: 0,
+        }
+    }
+
+    /// The samples to push before a frame stamped `t` (frames' clock).
+    pub fn before(&mut self, t: f64) -> &[GyroSample] {
+        let start = self.next;
+        let limit = t + FEED_AHEAD_S - self.offset;
+        while self.next < self.samples.len() && self.samples[self.next].t <= limit {
+            self.next += 1;
+        }
+        &self.samples[start..self.next]
+    }
+}
+
+/// The calibration of the IMU stream `imu_txt` of the sequence in `seq_dir`: the
+/// `imu` object of the `camera.json` beside `imu_txt`, else of the sequence's, with
+/// the file it came from; `None` if neither has one.
+pub fn find_calibration(
+    imu_txt: &Path,
+    seq_dir: &Path,
+) -> Result<Option<(ImuCalibration, std::path::PathBuf)>> {
+    let beside = imu_txt.parent().map(|p| p.join(crate::camera::CAMERA_FILE));
+    for cam in beside
+        .into_iter()
+        .chain([seq_dir.join(crate::camera::CAMERA_FILE)])
+    {
+        if cam.exists()
+            && let Some(c) = load_imu_calibration(&cam)?
+        {
+            return Ok(Some((c, cam)));
+        }
+    }
+    Ok(None)
+}
+
 /// The `imu` object of `camera.json`.
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -90,11 +90,27 @@ fn warm_pipeline_does_not_allocate_per_frame() {
     config.keyframes = true;
     config.lookup_depth = ecvo_core::LookupDepth::Raw;
     check(config, &frames, 20);
+    // With a gyroscope: its samples pushed before each frame, the tracker's ring
+    // and the pipeline's inbox allocated during the warm-up, never again.
+    let (config, frames, imu) = common::pan_with_imu(40, 7);
+    check_with(config, &frames, 15, &imu);
 }
 
 /// Runs `frames` through a pipeline and counts the allocations after the first `warm`.
 fn check(config: ecvo_core::Config, frames: &[common::Frame], warm: usize) {
+    check_with(config, frames, warm, &[]);
+}
+
+/// [`check`] with gyro samples pushed before each frame.
+fn check_with(
+    config: ecvo_core::Config,
+    frames: &[common::Frame],
+    warm: usize,
+    imu: &[ecvo_core::GyroSample],
+) {
     let width = config.camera.width;
+    let offset = config.imu.time_offset;
+    let next = std::cell::Cell::new(0usize);
     let pipeline = Pipeline::new(
         config,
         PipelineOptions {
@@ -109,6 +125,11 @@ fn check(config: ecvo_core::Config, frames: &[common::Frame], warm: usize) {
     )
     .unwrap();
     let push = |f: &common::Frame| {
+        let mut n = next.get();
+        pipeline
+            .push_imu(common::imu_before(imu, &mut n, f.timestamp, offset))
+            .unwrap();
+        next.set(n);
         pipeline
             .push(f.timestamp, |i, d| {
                 i.copy_from_slice(&f.intensity);
@@ -143,6 +164,14 @@ fn check(config: ecvo_core::Config, frames: &[common::Frame], warm: usize) {
     assert_eq!(summary.stats.tracked, frames.len() as u64);
     assert!(stats.counters.references.iter().sum::<u64>() > 0);
     assert!(stats.cloud_points > 0);
+    if !imu.is_empty() {
+        let c = &stats.counters.imu;
+        assert_eq!(
+            (c.priors, c.late, c.missing),
+            (frames.len() as u64 - 1, 0, 0),
+            "{c:?}"
+        );
+    }
     let seen = &sizes[..(allocs as usize).min(64)];
     assert!(
         seen.iter().all(|&s| s == INJECTOR_BLOCK) && allocs <= 2 * jobs.div_ceil(63),

@@ -16,6 +16,7 @@ use pyo3::prelude::*;
 mod arrays;
 mod camera;
 mod eval;
+mod imu;
 mod input;
 mod result;
 mod sequence;

@@ -269,6 +269,7 @@ fn track(
     config: ecvo_core::Config,
     threads: usize,
     n: usize,
+    mut imu: Option<ecvo_io::imu::ImuFeed>,
 ) -> PyResult<Run> {
     let err = |what: String| PyValueError::new_err(what);
     let pipeline = Pipeline::new(
@@ -292,6 +293,11 @@ fn track(
     #[allow(clippy::while_let_on_iterator)]
     while let Some(item) = reader.next() {
         let frame = item.map_err(crate::io_err)?;
+        if let Some(f) = &mut imu {
+            pipeline
+                .push_imu(f.before(frame.timestamp))
+                .map_err(|e| err(format!("IMU samples: {e}")))?;
+        }
         match pipeline.push_view(frame.view()) {
             Ok(PushStatus::Repeated) | Err(ecvo_pipeline::Error::TimestampNotIncreasing { .. }) => {
             }
@@ -334,10 +340,52 @@ fn track(
     })
 }
 
+/// The IMU stream `ecvo run` would use for the sequence in `dir` (`imu`: None for
+/// its `imu.txt` if any, False for none, a path for that file), its calibration put
+/// in `config`.
+fn imu_feed(
+    dir: &std::path::Path,
+    imu: Option<&Bound<'_, PyAny>>,
+    config: &mut ecvo_core::Config,
+) -> PyResult<Option<ecvo_io::imu::ImuFeed>> {
+    let path = match imu {
+        None => {
+            let p = dir.join(ecvo_io::imu::IMU_FILE);
+            if !p.exists() {
+                return Ok(None);
+            }
+            p
+        }
+        Some(v) if v.is_instance_of::<pyo3::types::PyBool>() => {
+            if v.extract::<bool>()? {
+                return Err(PyValueError::new_err(
+                    "run_sequence(): imu must be None (the sequence's imu.txt if any), \
+                     False (none) or a path",
+                ));
+            }
+            return Ok(None);
+        }
+        Some(v) => v.extract::<PathBuf>().map_err(|_| {
+            PyTypeError::new_err("run_sequence(): imu must be None, False or a path")
+        })?,
+    };
+    let samples = ecvo_io::imu::load_imu(&path).map_err(crate::io_err)?;
+    if let Some((c, _)) = ecvo_io::imu::find_calibration(&path, dir).map_err(crate::io_err)? {
+        config.imu = c;
+    }
+    Ok(Some(ecvo_io::imu::ImuFeed::new(
+        samples.iter().map(|s| s.gyro()).collect(),
+        config.imu.time_offset,
+    )))
+}
+
 /// Tracks a recorded sequence exactly as ``ecvo run`` does (the same settings
 /// give bit for bit the same poses): frames decoded ahead, the filter and tracker
 /// stages on ``threads`` threads; bit-identical repeated frames and non-increasing
-/// timestamps are skipped. Settings as for :class:`Tracker`.
+/// timestamps are skipped. Settings as for :class:`Tracker`, and imu: None (the
+/// folder's imu.txt if it has one, as ecvo run), False (none, as --no-imu) or the
+/// path of an imu.txt (as --imu), its calibration from the camera.json beside it
+/// or the folder's.
 #[pyfunction]
 #[pyo3(signature = (path, preset = "pc", mode = "l2", camera = None, max_frames = None, threads = 2, frame_step = 1, **settings))]
 pub fn run_sequence<'py>(
@@ -353,6 +401,7 @@ pub fn run_sequence<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut kw = Kwargs::new(settings, "run_sequence")?;
     let engine = EngineSettings::from_kwargs(preset, mode, &mut kw)?;
+    let imu_arg = kw.take_any("imu")?;
     kw.finish()?;
     if !(1..=256).contains(&threads) {
         return Err(PyValueError::new_err(format!(
@@ -360,9 +409,10 @@ pub fn run_sequence<'py>(
         )));
     }
     let sequence = open(&path, camera_override(camera)?, frame_step)?;
-    let config = engine.config(*sequence.camera())?;
+    let mut config = engine.config(*sequence.camera())?;
+    let imu = imu_feed(&path, imu_arg.as_ref(), &mut config)?;
     let n = max_frames.map_or(sequence.len(), |m| m.min(sequence.len()));
-    let run = py.detach(|| track(&sequence, config, threads, n))?;
+    let run = py.detach(|| track(&sequence, config, threads, n, imu))?;
     if run.outputs.is_empty() {
         return Err(PyValueError::new_err(format!(
             "{}: no frame was tracked",

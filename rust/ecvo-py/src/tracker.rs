@@ -48,6 +48,8 @@ pub fn counters_dict<'py>(py: Python<'py>, c: &Counters) -> PyResult<Bound<'py, 
     d.set_item("overlap_keyframes", c.overlap_keyframes)?;
     d.set_item("keyframe_spread_refusals", c.keyframe_spread_refusals)?;
     d.set_item("keyframe_fusions", c.keyframe_fusions)?;
+    d.set_item("noise_refits", c.noise_refits)?;
+    d.set_item("imu", crate::imu::counters_dict(py, &c.imu)?)?;
     Ok(d)
 }
 
@@ -126,8 +128,12 @@ impl Inner {
 /// ("chain": the paper's frame-to-frame chain, the default; "keyframe"),
 /// keyframe_overlap, keyframe_spread (floats), lookup_depth ("bilateral": the
 /// default, "raw", "filtered"), keyframe_fuse_every (int), memory_budget
-/// (int, bytes: the engine refuses a configuration that needs more). An unknown
-/// keyword is a TypeError, a bad value a ValueError.
+/// (int, bytes: the engine refuses a configuration that needs more). With a
+/// gyroscope (push_imu): imu_rotation (3x3 rotation taking IMU-frame vectors into
+/// the camera frame, x right, y down, z forward; default the identity),
+/// imu_time_offset (seconds added to an IMU timestamp to put it on the frames'
+/// clock; default 0), gyro_noise_density (rad/s/√Hz) and gyro_bias_random_walk
+/// (rad/s/√s). An unknown keyword is a TypeError, a bad value a ValueError.
 ///
 /// One tracker serves one thread at a time (another thread calling it meanwhile
 /// gets a RuntimeError saying so); several trackers run in parallel on several
@@ -154,7 +160,7 @@ impl PyTracker {
 }
 
 /// A pose from a 4x4 (rigid) or the rotation of a 3x3 array-like, checked.
-fn rigid(obj: &Bound<'_, PyAny>, name: &str, rotation_only: bool) -> PyResult<Pose> {
+pub(crate) fn rigid(obj: &Bound<'_, PyAny>, name: &str, rotation_only: bool) -> PyResult<Pose> {
     let n = if rotation_only { 3 } else { 4 };
     let arr = obj
         .py()
@@ -208,8 +214,10 @@ impl PyTracker {
         let camera = camera_arg(camera)?;
         let mut kw = Kwargs::new(settings, "Tracker")?;
         let engine = EngineSettings::from_kwargs(preset, mode, &mut kw)?;
+        let imu = crate::imu::calibration(&mut kw)?;
         kw.finish()?;
-        let config = engine.config(camera)?;
+        let mut config = engine.config(camera)?;
+        config.imu = imu;
         let odo = Odometry::new(config.clone()).map_err(|e| {
             let hint = match e {
                 ecvo_core::Error::MemoryBudget { .. } => {
@@ -350,6 +358,23 @@ impl PyTracker {
         this.trajectory.push(out.timestamp, out.pose);
         this.states.push(out.state);
         Ok(PyFrameResult::new(py, &out))
+    }
+
+    /// Gyroscope samples for the frames pushed after this call: timestamps (N,)
+    /// seconds on the IMU's clock, rates (N, 3) rad/s in the IMU's frame, in time
+    /// order. Each frame's registration then starts from the gyro's rotation since
+    /// the previous frame (less its bias, estimated as it goes) besides the
+    /// identity. A sample not after the last one taken is dropped and counted
+    /// (counters()["imu"]["refused"]); samples that do not cover a frame leave it
+    /// tracked without them (counted "late" or "missing"), never an error. A
+    /// non-finite value refuses the whole batch with a ValueError; a wrong shape
+    /// is a ValueError.
+    fn push_imu(&self, timestamps: &Bound<'_, PyAny>, rates: &Bound<'_, PyAny>) -> PyResult<()> {
+        let samples = crate::imu::samples(timestamps, rates)?;
+        let mut this = self.lock()?;
+        this.odo()?
+            .push_imu(&samples)
+            .map_err(|e| PyValueError::new_err(e.to_string()))
     }
 
     /// New intrinsics of the same image size (a zoom) for the frames pushed from

@@ -290,7 +290,7 @@ fn best_start<K: Loops>(
     // scale would flatter it, and out-of-view points, which a large true motion
     // has, count as the worst outliers).
     let common = if cfg.scale_from_last_start {
-        outs.clone().filter_map(|o| o.scale).last()
+        outs.clone().rev().find_map(|o| o.scale)
     } else {
         outs.clone().find_map(|o| o.scale)
     };

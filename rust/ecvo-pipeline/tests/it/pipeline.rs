@@ -452,3 +452,51 @@ fn real_tum_stream_matches_sequential_odometry() {
 fn full_resolution_tum_stream_matches_one_thread_odometry_at_1_2_and_4_threads() {
     tum_stream_matches_one_thread_odometry("tum_fr1_xyz_full300", 20, &[1, 2, 4]);
 }
+
+/// With gyroscope samples pushed beside the frames, the pipeline's poses and counters
+/// are still the sequential engine's, bit for bit, at 1 and 2 threads (the tracker
+/// stage hands the tracker exactly the samples pushed before each frame).
+#[test]
+fn offline_poses_with_an_imu_equal_sequential_odometry_bit_for_bit() {
+    let (config, frames, imu) = common::pan_with_imu(30, 4);
+    let offset = config.imu.time_offset;
+    let mut odo = Odometry::new(config.clone()).unwrap();
+    let mut next = 0;
+    let expected: Vec<FrameOutput> = frames
+        .iter()
+        .map(|f| {
+            odo.push_imu(common::imu_before(&imu, &mut next, f.timestamp, offset))
+                .unwrap();
+            odo.push(f.view()).unwrap()
+        })
+        .collect();
+    let c = odo.tracker().counters();
+    assert_eq!((c.imu.priors, c.lost_frames), (29, 0), "{:?}", c.imu);
+    for threads in [1, 2] {
+        let pipeline = Pipeline::new(
+            config.clone(),
+            PipelineOptions {
+                threads,
+                keep_trajectory: true,
+                ..PipelineOptions::default()
+            },
+        )
+        .unwrap();
+        let mut next = 0;
+        for f in &frames {
+            pipeline
+                .push_imu(common::imu_before(&imu, &mut next, f.timestamp, offset))
+                .unwrap();
+            pipeline.push_view(f.view()).unwrap();
+        }
+        let summary = pipeline.finish().unwrap();
+        for (i, (r, e)) in summary.trajectory.iter().zip(&expected).enumerate() {
+            assert_eq!(
+                common::bits(&r.pose),
+                common::bits(&e.pose),
+                "frame {i}, {threads} threads"
+            );
+        }
+        assert_eq!(&summary.stats.counters, odo.tracker().counters());
+    }
+}

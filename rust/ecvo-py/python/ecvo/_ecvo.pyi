@@ -120,6 +120,20 @@ class _Counters(TypedDict):
     overlap_keyframes: int
     keyframe_spread_refusals: int
     keyframe_fusions: int
+    noise_refits: int
+    imu: _ImuCounters
+
+class _ImuCounters(TypedDict):
+    """What became of the gyroscope's samples (Tracker.push_imu) and priors."""
+
+    samples: int
+    refused: int
+    dropped: int
+    priors: int
+    late: int
+    missing: int
+    bias_updates: int
+    bias_outliers: int
 
 class _Ate(TypedDict):
     """Absolute trajectory error (metres) after rigid alignment of the estimate."""
@@ -238,8 +252,12 @@ class Tracker:
     ("chain": the paper's frame-to-frame chain, the default; "keyframe"),
     keyframe_overlap, keyframe_spread (floats), lookup_depth ("bilateral": the
     default, "raw", "filtered"), keyframe_fuse_every (int), memory_budget
-    (int, bytes: the engine refuses a configuration that needs more). An unknown
-    keyword is a TypeError, a bad value a ValueError.
+    (int, bytes: the engine refuses a configuration that needs more). With a
+    gyroscope (push_imu): imu_rotation (3x3 rotation taking IMU-frame vectors into
+    the camera frame, x right, y down, z forward; default the identity),
+    imu_time_offset (seconds added to an IMU timestamp to put it on the frames'
+    clock; default 0), gyro_noise_density (rad/s/√Hz) and gyro_bias_random_walk
+    (rad/s/√s). An unknown keyword is a TypeError, a bad value a ValueError.
 
     One tracker serves one thread at a time (another thread calling it meanwhile
     gets a RuntimeError saying so); several trackers run in parallel on several
@@ -287,6 +305,16 @@ class Tracker:
 
         A wrong type or dtype is a TypeError; a wrong shape, an out-of-range value,
         a non-increasing timestamp or a closed tracker a ValueError."""
+    def push_imu(self, timestamps: npt.ArrayLike, rates: npt.ArrayLike) -> None:
+        """Gyroscope samples for the frames pushed after this call: timestamps (N,)
+        seconds on the IMU's clock, rates (N, 3) rad/s in the IMU's frame, in time
+        order. Each frame's registration then starts from the gyro's rotation since
+        the previous frame (less its bias, estimated as it goes) besides the
+        identity. A sample not after the last one taken is dropped and counted
+        (counters()["imu"]["refused"]); samples that do not cover a frame leave it
+        tracked without them (counted "late" or "missing"), never an error. A
+        non-finite value refuses the whole batch with a ValueError; a wrong shape
+        is a ValueError."""
     def set_intrinsics(self, camera: Camera) -> None:
         """New intrinsics of the same image size (a zoom) for the frames pushed from
         now on."""
@@ -386,7 +414,10 @@ def run_sequence(
     """Tracks a recorded sequence exactly as ``ecvo run`` does (the same settings
     give bit for bit the same poses): frames decoded ahead, the filter and tracker
     stages on ``threads`` threads; bit-identical repeated frames and non-increasing
-    timestamps are skipped. Settings as for :class:`Tracker`."""
+    timestamps are skipped. Settings as for :class:`Tracker`, and imu: None (the
+    folder's imu.txt if it has one, as ecvo run), False (none, as --no-imu) or the
+    path of an imu.txt (as --imu), its calibration from the camera.json beside it
+    or the folder's."""
 
 def ate(
     gt: Union[_Path, npt.NDArray[np.float64]],

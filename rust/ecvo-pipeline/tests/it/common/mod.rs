@@ -64,3 +64,41 @@ fn frames_of(seq: SynthSequence) -> (Config, Vec<Frame>) {
 pub fn bits(pose: &ecvo_core::Pose) -> Vec<u64> {
     pose.to_homogeneous().iter().map(|v| v.to_bits()).collect()
 }
+
+/// A 10 Hz in-place pan peaking at 200 °/s (320x180) with a simulated phone gyro
+/// riding on it: the configuration (its calibration in `Config::imu`), the frames and
+/// the gyro's samples.
+pub fn pan_with_imu(frames: usize, seed: u64) -> (Config, Vec<Frame>, Vec<ecvo_core::GyroSample>) {
+    let mut seq = SynthSequence::pan_320x180(frames, seed, 2.5, 200f64.to_radians());
+    seq.fps = 10.0;
+    let m = ecvo_synth::imu::ImuModel::phone(seed);
+    let end = seq.timestamp(frames.saturating_sub(1)) + 0.1;
+    let imu = m
+        .simulate(|t| seq.path.pose_at(t), -0.1, end)
+        .iter()
+        .map(|r| ecvo_core::GyroSample { t: r.t, w: r.w })
+        .collect();
+    let (mut config, frames) = frames_of(seq);
+    config.imu = ecvo_core::ImuCalibration {
+        camera_from_imu: m.camera_from_imu,
+        time_offset: m.time_offset,
+        gyro_noise_density: Some(m.gyro_noise_density),
+        gyro_bias_random_walk: Some(m.gyro_bias_random_walk),
+    };
+    (config, frames, imu)
+}
+
+/// The samples of `imu` to push before a frame stamped `t` (those up to 5 ms after
+/// it on the frames' clock, from `*next` on), advancing `*next`.
+pub fn imu_before<'a>(
+    imu: &'a [ecvo_core::GyroSample],
+    next: &mut usize,
+    t: f64,
+    offset: f64,
+) -> &'a [ecvo_core::GyroSample] {
+    let start = *next;
+    while *next < imu.len() && imu[*next].t + offset <= t + 0.005 {
+        *next += 1;
+    }
+    &imu[start..*next]
+}
