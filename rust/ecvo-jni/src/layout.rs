@@ -1,8 +1,8 @@
 //! The numbers that cross the boundary: code tables, array layouts and conversions
 //! shared with the Kotlin side (`TrackerConfig.kt`, `TimedPose.kt`, `TrackerStats.kt`).
 
-use ecvo_core::Pose;
-use ecvo_pipeline::{CloudPoint, PipelineStats, PoseRecord};
+use ecvo_core::{LostReason, Pose, TrackingState};
+use ecvo_pipeline::{CloudPoint, LatestPose, PipelineStats, PoseRecord};
 use jni::sys::{jint, jlong};
 
 /// What `nativeGetPose` returns when there is no pose yet (`Tracker.NO_POSE`).
@@ -20,7 +20,74 @@ pub const TRAJECTORY_WINDOW: usize = 32_768;
 pub const REFERENCE_STRIDE: usize = 9;
 
 /// Doubles in `nativeStats` (`TrackerStats.SIZE`).
-pub const STATS_SIZE: usize = 15;
+pub const STATS_SIZE: usize = 21;
+
+/// Doubles in `nativeFrameQuality` (`FrameQuality.SIZE`; layout in [`quality_doubles`]).
+pub const QUALITY_SIZE: usize = 53;
+
+/// `io.ecvo.LostReason` codes: 0 while not lost, then the [`LostReason`] variants in
+/// their declaration order, 1 ([`LostReason::NoValidDepth`]) to 7
+/// ([`LostReason::SpreadJump`]).
+pub fn lost_reason_code(reason: Option<LostReason>) -> u8 {
+    match reason {
+        None => 0,
+        Some(LostReason::NoValidDepth) => 1,
+        Some(LostReason::TooFewPoints) => 2,
+        Some(LostReason::Degenerate) => 3,
+        Some(LostReason::Diverged) => 4,
+        Some(LostReason::Inconsistent) => 5,
+        Some(LostReason::ImplausibleSpeed) => 6,
+        Some(LostReason::SpreadJump) => 7,
+    }
+}
+
+/// `io.ecvo.TrackingState` codes (`nativeState`).
+pub fn state_code(tracked: u64, state: TrackingState) -> u8 {
+    match state {
+        _ if tracked == 0 => 0,
+        TrackingState::Initialising => 0,
+        TrackingState::Tracking => 1,
+        TrackingState::Lost => 2,
+    }
+}
+
+/// The latest frame and the quality of its registration as the [`QUALITY_SIZE`]
+/// doubles of `nativeFrameQuality` (`FrameQuality.kt` reads them):
+///
+/// | index | value |
+/// |---|---|
+/// | 0 | frame index (0-based, in tracking order) |
+/// | 1 | state code (0 initialising, 1 tracking, 2 lost) |
+/// | 2 | lost reason code ([`lost_reason_code`]) |
+/// | 3..11 | pose: t (s), tx, ty, tz, qx, qy, qz, qw, as `nativeTrajectory` |
+/// | 11..47 | 6x6 information matrix, row-major, ordered (rx, ry, rz, tx, ty, tz) as Open3D and ecvo-py (the engine's twist is `[v; ω]`); zeros without a registration |
+/// | 47..50 | residual scale Σ_II, Σ_IZ, Σ_ZZ; NaN without one |
+/// | 50 | template points that landed on valid pixels at the finest step |
+/// | 51 | template points of the finest step |
+/// | 52 | reference levels (the frame became the reference at 1..=n) |
+///
+/// Nothing is allocated: it fills `out`.
+pub fn quality_doubles(latest: &LatestPose, out: &mut [f64; QUALITY_SIZE]) {
+    out[0] = latest.tracked.saturating_sub(1) as f64;
+    out[1] = f64::from(state_code(latest.tracked, latest.state));
+    out[2] = f64::from(lost_reason_code(latest.lost_reason));
+    let t = latest.pose.translation.vector;
+    let q = latest.pose.rotation.quaternion();
+    out[3..11].copy_from_slice(&[latest.timestamp, t.x, t.y, t.z, q.i, q.j, q.k, q.w]);
+    let reg = latest.registration.as_ref();
+    // The engine orders the twist [v; ω]; Open3D (and ecvo-py) [ω; v].
+    let swap = |k: usize| (k + 3) % 6;
+    for i in 0..6 {
+        for j in 0..6 {
+            out[11 + 6 * i + j] = reg.map_or(0.0, |r| r.information[(swap(i), swap(j))]);
+        }
+    }
+    let scale = reg.and_then(|r| r.scale);
+    out[47..50].copy_from_slice(&scale.map_or([f64::NAN; 3], |s| [s.ii, s.iz, s.zz]));
+    out[50] = reg.map_or(0.0, |r| r.valid_pixels as f64);
+    out[51] = reg.map_or(0.0, |r| r.template_points as f64);
+    out[52] = f64::from(latest.reference_levels);
+}
 
 /// With the `test-hooks` feature only: a push with this timestamp panics inside the
 /// native call (the misuse suite checks it becomes a `RuntimeException`).
@@ -73,7 +140,8 @@ pub fn pose_doubles(r: &PoseRecord) -> [f64; POSE_STRIDE] {
     [r.timestamp, t.x, t.y, t.z, q.i, q.j, q.k, q.w]
 }
 
-/// The 15 doubles of `nativeStats` (layout in `TrackerStats.kt`).
+/// The 21 doubles of `nativeStats` (layout in `TrackerStats.kt`; 15..21 are the IMU's
+/// counters, `Counters::imu`).
 pub fn stats_doubles(s: &PipelineStats) -> [f64; STATS_SIZE] {
     let c = &s.counters;
     let level = |i: usize| c.references.get(i).copied().unwrap_or(0) as f64;
@@ -93,6 +161,12 @@ pub fn stats_doubles(s: &PipelineStats) -> [f64; STATS_SIZE] {
         s.latency.mean_ms,
         s.wall_ms_per_frame,
         s.poses_discarded as f64,
+        c.imu.samples as f64,
+        c.imu.refused as f64,
+        c.imu.dropped as f64,
+        c.imu.priors as f64,
+        c.imu.late as f64,
+        c.imu.missing as f64,
     ]
 }
 

@@ -7,7 +7,7 @@
 //!
 //! ## The native methods
 //!
-//! The 16 `@JvmStatic external fun` of `NativeBridge.kt` are declared once each with
+//! The 19 `@JvmStatic external fun` of `NativeBridge.kt` are declared once each with
 //! jni 0.22's `native_method!` (see [`NATIVE_METHODS`]): the macro checks at compile
 //! time that each Rust implementation matches the JNI signature written next to it,
 //! and exports it under its short JNI name (`Java_io_ecvo_NativeBridge_nativeInit`,
@@ -56,6 +56,7 @@
 //! ## Modules
 //!
 //! `natives` (the method table and wrappers), `config` (`nativeInit`'s arguments),
+//! `imu` (gyroscope samples: `nativePushImu`, `nativePushImuBatch`),
 //! `tracker` (handles and the registry), `frames` (buffers and arrays), `depth16`,
 //! `layout` (code tables and array layouts shared with Kotlin), `error` (the one
 //! mapping of failures to Java exceptions), `blocks` (the library's allocator: large
@@ -78,6 +79,7 @@ mod error;
 mod frames;
 #[doc(hidden)]
 pub mod handles;
+mod imu;
 mod layout;
 mod limits;
 mod natives;

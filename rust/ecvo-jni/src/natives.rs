@@ -1,7 +1,6 @@
 //! The native methods: declared once in [`bridge!`], each a thin wrapper that finds the
 //! tracker, converts its arguments and calls the engine.
 
-use ecvo_core::TrackingState;
 use jni::objects::{JByteArray, JByteBuffer, JClass, JDoubleArray, JFloatArray, JShortArray};
 use jni::sys::{jboolean, jdouble, jint, jlong};
 use jni::{Env, NativeMethod};
@@ -9,8 +8,10 @@ use jni::{Env, NativeMethod};
 use crate::config::InitArgs;
 use crate::error::{Failure, bad, run};
 use crate::frames::{PlaneLayout, array_len, copy_plane, direct};
+use crate::imu::{native_push_imu, native_push_imu_batch};
 use crate::layout::{
-    NO_POSE, REFERENCE_STRIDE, cloud_floats, pose_doubles, pose_matrix, stats_doubles,
+    NO_POSE, QUALITY_SIZE, REFERENCE_STRIDE, cloud_floats, pose_doubles, pose_matrix,
+    quality_doubles, state_code, stats_doubles,
 };
 use crate::layout::{POSE_STRIDE, TRAJECTORY_WINDOW};
 use crate::tracker::{REGISTRY, init, lock, tracker};
@@ -57,6 +58,12 @@ bridge! {
         fn native_push_arrays(handle: jlong, timestamp_ns: jlong, depth: [jshort], intensity: [jbyte]) -> jint;
     NATIVE_GET_POSE = "Java_io_ecvo_NativeBridge_nativeGetPose",
         fn native_get_pose(handle: jlong, out: [jfloat]) -> jlong;
+    NATIVE_PUSH_IMU = "Java_io_ecvo_NativeBridge_nativePushImu",
+        fn native_push_imu(handle: jlong, timestamp_ns: jlong, wx: jdouble, wy: jdouble, wz: jdouble);
+    NATIVE_PUSH_IMU_BATCH = "Java_io_ecvo_NativeBridge_nativePushImuBatch",
+        fn native_push_imu_batch(handle: jlong, timestamps_ns: [jlong], rates: [jfloat], count: jint);
+    NATIVE_FRAME_QUALITY = "Java_io_ecvo_NativeBridge_nativeFrameQuality",
+        fn native_frame_quality(handle: jlong, out: [jdouble]) -> jlong;
     NATIVE_STATE = "Java_io_ecvo_NativeBridge_nativeState",
         fn native_state(handle: jlong) -> jint;
     NATIVE_FLUSH = "Java_io_ecvo_NativeBridge_nativeFlush",
@@ -309,6 +316,39 @@ fn native_get_pose<'local>(
     })
 }
 
+/// `nativeFrameQuality`: the latest frame, its pose and its registration's quality
+/// into `out[0..QUALITY_SIZE]` ([`quality_doubles`]); returns its timestamp, or
+/// `NO_POSE` (leaving `out` untouched) before the first frame is tracked. One copy
+/// of the latest output under its lock, so the pose and its quality are of the same
+/// frame; nothing allocated.
+fn native_frame_quality<'local>(
+    env: &mut Env<'local>,
+    _class: JClass<'local>,
+    handle: jlong,
+    out: JDoubleArray<'local>,
+) -> jni::errors::Result<jlong> {
+    run(env, |env| {
+        let t = tracker(handle)?;
+        if out.is_null() {
+            return Err(bad("out: array is null"));
+        }
+        let len = out.len(env)?;
+        if len < QUALITY_SIZE {
+            return Err(bad(format!(
+                "out: array has {len} values, a frame's quality needs {QUALITY_SIZE}"
+            )));
+        }
+        let latest = t.pipeline.latest();
+        if latest.tracked == 0 {
+            return Ok(NO_POSE);
+        }
+        let mut v = [0f64; QUALITY_SIZE];
+        quality_doubles(&latest, &mut v);
+        out.set_region(env, 0, &v)?;
+        Ok(t.stamp_ns(latest.timestamp))
+    })
+}
+
 fn native_state<'local>(
     env: &mut Env<'local>,
     _class: JClass<'local>,
@@ -317,12 +357,7 @@ fn native_state<'local>(
     run(env, |_| {
         let t = tracker(handle)?;
         let latest = t.pipeline.latest();
-        Ok(match latest.state {
-            _ if latest.tracked == 0 => 0,
-            TrackingState::Initialising => 0,
-            TrackingState::Tracking => 1,
-            TrackingState::Lost => 2,
-        })
+        Ok(jint::from(state_code(latest.tracked, latest.state)))
     })
 }
 

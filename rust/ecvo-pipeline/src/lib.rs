@@ -273,6 +273,8 @@ impl Pipeline {
                 pose: Pose::identity(),
                 state: TrackingState::Initialising,
                 reference_levels: 0,
+                registration: None,
+                lost_reason: None,
                 pushed_at: Instant::now(),
                 tracked_at: Instant::now(),
             }),

@@ -234,6 +234,8 @@ pub(crate) fn tracker_stage(
             pose: out.pose,
             state: out.state,
             reference_levels,
+            registration: out.registration,
+            lost_reason: out.lost_reason,
             pushed_at: meta.pushed_at,
             tracked_at: now,
         };

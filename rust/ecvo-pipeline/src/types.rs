@@ -198,8 +198,9 @@ pub struct PoseRecord {
     pub reference_levels: u8,
 }
 
-/// The latest tracked pose, for a user interface.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The latest tracked pose, for a user interface (not `PartialEq`: its
+/// `registration` is a [`ecvo_core::MotionResult`]).
+#[derive(Clone, Copy, Debug)]
 pub struct LatestPose {
     /// Frames tracked so far (0: the fields below are not meaningful yet).
     pub tracked: u64,
@@ -213,6 +214,12 @@ pub struct LatestPose {
     pub state: TrackingState,
     /// The frame became the reference at levels `1..=reference_levels`.
     pub reference_levels: u8,
+    /// The registration the pose came from, as [`ecvo_core::FrameOutput::registration`]:
+    /// its `information`, `scale` and `valid_pixels / template_points` are the frame's
+    /// quality (None for the first frame, a re-anchored one and a lost one).
+    pub registration: Option<ecvo_core::MotionResult>,
+    /// Why the frame was lost, as [`ecvo_core::FrameOutput::lost_reason`].
+    pub lost_reason: Option<ecvo_core::LostReason>,
     /// When the frame was pushed.
     pub pushed_at: Instant,
     /// When its pose was published.

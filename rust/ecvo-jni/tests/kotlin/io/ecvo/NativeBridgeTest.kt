@@ -41,40 +41,11 @@ class NativeBridgeTest {
         throw IllegalStateException()
     }
 
-    private class Stream(
-        val width: Int, val height: Int, val fx: Double, val fy: Double, val cx: Double, val cy: Double,
-        val stamps: LongArray, val depth: List<ShortArray>, val intensity: List<ByteArray>,
-        val expectedMatrices: List<FloatArray>, val expectedTrajectory: DoubleArray,
-    )
+    private fun dataDir(): File? = JvmTestStream.dataDir()
 
-    private fun dataDir(): File? = System.getenv("ECVO_JNI_TEST_DATA")?.let(::File)
+    private fun stream(): JvmTestStream = JvmTestStream.load()
 
-    private fun stream(): Stream {
-        val dir = dataDir()
-        assumeTrue("ECVO_JNI_TEST_DATA is not set (run through tests/jvm.rs)", dir != null)
-        val meta = File(dir, "meta.txt").readText().trim().split(Regex("\\s+"))
-        val w = meta[0].toInt(); val h = meta[1].toInt(); val n = meta[6].toInt()
-        val bytes = ByteBuffer.wrap(File(dir, "frames.bin").readBytes()).order(ByteOrder.LITTLE_ENDIAN)
-        val stamps = LongArray(n)
-        val depth = ArrayList<ShortArray>(); val intensity = ArrayList<ByteArray>()
-        for (f in 0 until n) {
-            stamps[f] = bytes.long
-            val d = ShortArray(w * h); for (i in d.indices) d[i] = bytes.short
-            val g = ByteArray(w * h); bytes.get(g)
-            depth += d; intensity += g
-        }
-        val mats = ArrayList<FloatArray>(); val traj = ArrayList<Double>()
-        File(dir, "expected.txt").readLines().filter { it.isNotBlank() }.forEachIndexed { i, line ->
-            val v = line.trim().split(" ")
-            assertEquals("expected.txt line $i timestamp", stamps[i], v[0].toLong())
-            mats += FloatArray(16) { java.lang.Float.intBitsToFloat(v[1 + it].toInt()) }
-            for (k in 0 until 8) traj += java.lang.Double.longBitsToDouble(v[17 + k].toLong())
-        }
-        return Stream(w, h, meta[2].toDouble(), meta[3].toDouble(), meta[4].toDouble(), meta[5].toDouble(),
-            stamps, depth, intensity, mats, traj.toDoubleArray())
-    }
-
-    private fun config(s: Stream? = null, admission: Admission = Admission.OFFLINE) = TrackerConfig(
+    private fun config(s: JvmTestStream? = null, admission: Admission = Admission.OFFLINE) = TrackerConfig(
         width = s?.width ?: 320, height = s?.height ?: 180,
         fx = s?.fx ?: 250.0, fy = s?.fy ?: 250.0, cx = s?.cx ?: 159.5, cy = s?.cy ?: 89.5,
         preset = Preset.PHONE, mode = Mode.L2, admission = admission, threads = 2, pointCloud = true,

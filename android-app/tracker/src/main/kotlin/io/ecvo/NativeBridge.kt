@@ -44,6 +44,27 @@ internal object NativeBridge {
     /** Writes the latest pose (4x4 column-major, camera to world) into out[0..16]; returns its timestamp or Long.MIN_VALUE. */
     @JvmStatic external fun nativeGetPose(handle: Long, out: FloatArray?): Long
 
+    /**
+     * Takes one gyroscope sample: [timestampNs] on the frames' clock, rates in rad/s in the
+     * camera's axes (x right, y down, z forward). IllegalArgumentException for a
+     * non-finite rate.
+     */
+    @JvmStatic external fun nativePushImu(handle: Long, timestampNs: Long, wx: Double, wy: Double, wz: Double)
+
+    /**
+     * Takes samples `0 until count`: [timestampsNs][i] and [rates][3i..3i+2] (as
+     * [nativePushImu]), in one crossing. IllegalArgumentException (none taken) for a null
+     * or short array, a negative count or more than 4096, or a non-finite rate.
+     */
+    @JvmStatic external fun nativePushImuBatch(handle: Long, timestampsNs: LongArray?, rates: FloatArray?, count: Int)
+
+    /**
+     * Writes the latest frame, its pose and its registration's quality into
+     * out[0..FrameQuality.SIZE] (layout at [FrameQuality.SIZE]); returns its timestamp or
+     * Long.MIN_VALUE, as [nativeGetPose].
+     */
+    @JvmStatic external fun nativeFrameQuality(handle: Long, out: DoubleArray?): Long
+
     /** The tracking state code: 0 initialising, 1 tracking, 2 lost. */
     @JvmStatic external fun nativeState(handle: Long): Int
 

@@ -17,6 +17,9 @@ interface PoseTracker : AutoCloseable {
     /** The latest pose into `out[0..16]`; its timestamp, or [Tracker.NO_POSE]. */
     fun getPose(out: FloatArray): Long
 
+    /** Gyroscope samples `0 until count` for the frames pushed after the call (see [Tracker.pushImu]). */
+    fun pushImu(timestampsNs: LongArray, rates: FloatArray, count: Int)
+
     /** The current tracking state. */
     val state: TrackingState
 
@@ -148,12 +151,56 @@ class Tracker(val config: TrackerConfig) : PoseTracker {
     }
 
     /**
+     * Gives the tracker one gyroscope sample (issue 47): [timestampNs] on the clock of the
+     * frames' timestamps (an app puts `SensorEvent.timestamp` on it), angular rate in rad/s
+     * in the **camera's axes** (x right, y down, z forward: rotate the device's sensor
+     * axes first, e.g. with `ImuCalibration.cameraFromDevice` of `:shared`). Samples count
+     * for the frames pushed after the call: push a frame's samples before the frame. Each
+     * frame's registration then starts from the gyroscope's rotation over its interval,
+     * with the bias estimated online. Samples in time order; one not after the last one
+     * taken is dropped and counted ([TrackerStats.imuRefused]); late or missing samples
+     * make frames track without the gyroscope, counted, never an error. A non-finite rate
+     * is an IllegalArgumentException. Without any sample the poses are those of a tracker
+     * without an IMU, bit for bit.
+     */
+    fun pushImu(timestampNs: Long, wx: Double, wy: Double, wz: Double): Unit =
+        withHandle { h -> NativeBridge.nativePushImu(h, timestampNs, wx, wy, wz) }
+
+    /**
+     * Gives the tracker samples `0 until count` in one native call (a sensor callback's or
+     * a frame's worth, at most [MAX_IMU_BATCH]): [timestampsNs][i] and the rates
+     * [rates][3i], [rates][3i+1], [rates][3i+2], as [pushImu]. The arrays are read before
+     * the call returns. A non-finite rate refuses the whole batch
+     * (IllegalArgumentException, none taken), as do a short array or a bad [count].
+     */
+    override fun pushImu(timestampsNs: LongArray, rates: FloatArray, count: Int): Unit =
+        withHandle { h -> NativeBridge.nativePushImuBatch(h, timestampsNs, rates, count) }
+
+    /**
      * Writes the latest pose into `out[0..16]`: a 4x4 column-major camera-to-world matrix
      * (world = first camera; x right, y down, z forward), ready for OpenGL. Returns that
      * frame's timestamp in nanoseconds, or [NO_POSE] (leaving [out] untouched) before the
      * first frame is tracked.
      */
     override fun getPose(out: FloatArray): Long = withHandle { h -> NativeBridge.nativeGetPose(h, out) }
+
+    /**
+     * Writes the latest tracked frame with the quality of its registration into
+     * `out[0..FrameQuality.SIZE]` (layout at [FrameQuality.SIZE]: index, state, lost
+     * reason, pose, the 6x6 information matrix, residual scale, points used) and returns
+     * its timestamp in nanoseconds, or [NO_POSE] (leaving [out] untouched) before the
+     * first frame is tracked. Allocates nothing: a caller polling every frame reuses
+     * [out]. The pose and the figures are of the same frame. Only the latest frame is
+     * kept: a caller that polls less often than frames are tracked sees a gap in
+     * `out[0]`, the frame index.
+     */
+    fun frameQuality(out: DoubleArray): Long = withHandle { h -> NativeBridge.nativeFrameQuality(h, out) }
+
+    /** The latest tracked frame with its quality (see the overload above), or null before the first. */
+    fun frameQuality(): FrameQuality? {
+        val a = DoubleArray(FrameQuality.SIZE)
+        return if (frameQuality(a) == NO_POSE) null else FrameQuality.fromArray(a)
+    }
 
     /** The current tracking state. */
     override val state: TrackingState get() = withHandle { h -> TrackingState.fromCode(NativeBridge.nativeState(h)) }
@@ -215,6 +262,9 @@ class Tracker(val config: TrackerConfig) : PoseTracker {
     companion object {
         /** What [getPose] returns when there is no pose yet. */
         const val NO_POSE: Long = Long.MIN_VALUE
+
+        /** Most samples one [pushImu] batch takes (`ecvo_jni::imu::MAX_BATCH`). */
+        const val MAX_IMU_BATCH: Int = 4096
 
         /**
          * Poses the native tracker keeps (the latest ones; about 18 minutes at 30 Hz), so

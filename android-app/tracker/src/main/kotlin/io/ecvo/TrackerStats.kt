@@ -43,6 +43,18 @@ data class TrackerStats(
      * [Tracker.trajectorySince] from here on).
      */
     val trajectoryStart: Long = 0,
+    /** Gyroscope samples the tracker took ([Tracker.pushImu]). */
+    val imuSamples: Long = 0,
+    /** Gyroscope samples dropped because they were not after the last one taken. */
+    val imuRefused: Long = 0,
+    /** Gyroscope samples lost before the tracker read them (it was far behind). */
+    val imuDropped: Long = 0,
+    /** Frames whose frame-to-frame registration started from the gyroscope's rotation. */
+    val imuPriors: Long = 0,
+    /** Frames tracked without the gyroscope because its samples were late. */
+    val imuLate: Long = 0,
+    /** Frames tracked without the gyroscope because samples were missing over the frame's interval. */
+    val imuMissing: Long = 0,
 ) {
     companion object {
         /**
@@ -66,10 +78,16 @@ data class TrackerStats(
          * | 12 | [latencyMs] |
          * | 13 | [totalMs] |
          * | 14 | [trajectoryStart] |
+         * | 15 | [imuSamples] |
+         * | 16 | [imuRefused] |
+         * | 17 | [imuDropped] |
+         * | 18 | [imuPriors] |
+         * | 19 | [imuLate] |
+         * | 20 | [imuMissing] |
          *
          * Later versions may append fields; [fromArray] ignores what it does not know.
          */
-        const val SIZE: Int = 15
+        const val SIZE: Int = 21
 
         /** All zeros: what a fresh tracker reports. */
         val EMPTY: TrackerStats = fromArray(DoubleArray(SIZE))
@@ -96,6 +114,12 @@ data class TrackerStats(
                 latencyMs = a[12],
                 totalMs = a[13],
                 trajectoryStart = a[14].toLong(),
+                imuSamples = a[15].toLong(),
+                imuRefused = a[16].toLong(),
+                imuDropped = a[17].toLong(),
+                imuPriors = a[18].toLong(),
+                imuLate = a[19].toLong(),
+                imuMissing = a[20].toLong(),
             )
         }
     }
@@ -106,5 +130,7 @@ data class TrackerStats(
         motionEstimations.toDouble(), referencesL1.toDouble(), referencesL2.toDouble(),
         lostFrames.toDouble(), failedCorrections.toDouble(), reanchors.toDouble(),
         filterMs, trackerMs, geometryMs, latencyMs, totalMs, trajectoryStart.toDouble(),
+        imuSamples.toDouble(), imuRefused.toDouble(), imuDropped.toDouble(),
+        imuPriors.toDouble(), imuLate.toDouble(), imuMissing.toDouble(),
     )
 }

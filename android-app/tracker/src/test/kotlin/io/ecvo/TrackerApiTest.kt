@@ -88,6 +88,13 @@ class TrackerApiTest {
         assertEquals(0.75, s.geometryMs, 0.0)
         assertEquals(4.5, s.latencyMs, 0.0)
         assertEquals(5.0, s.totalMs, 0.0)
+        assertEquals(15L, s.trajectoryStart)
+        assertEquals(16L, s.imuSamples)
+        assertEquals(17L, s.imuRefused)
+        assertEquals(18L, s.imuDropped)
+        assertEquals(19L, s.imuPriors)
+        assertEquals(20L, s.imuLate)
+        assertEquals(21L, s.imuMissing)
         assertArrayEquals(a, s.toArray(), 0.0)
         // Appended fields of a newer library are ignored; a short array is refused.
         assertEquals(s, TrackerStats.fromArray(a + doubleArrayOf(99.0, 98.0)))
@@ -142,6 +149,9 @@ class TrackerApiTest {
             "nativePushStrided" to listOf(J, J, ByteBuffer::class.java, I, ByteBuffer::class.java, I),
             "nativePushArrays" to listOf(J, J, ShortArray::class.java, ByteArray::class.java),
             "nativeGetPose" to listOf(J, FloatArray::class.java),
+            "nativeFrameQuality" to listOf(J, DoubleArray::class.java),
+            "nativePushImu" to listOf(J, J, D, D, D),
+            "nativePushImuBatch" to listOf(J, LongArray::class.java, FloatArray::class.java, I),
             "nativeState" to listOf(J),
             "nativeFlush" to listOf(J),
             "nativeSetIntrinsics" to listOf(J, D, D, D, D),

@@ -17,6 +17,7 @@ object DeviceInfo {
         liveMode = liveMode,
         camera = camera,
         gravityUp = GravitySensor.up,
+        imuClock = if (GyroSensor.rotationCameraDevice != null) SessionHolder.controller.session?.cameraClock?.method?.label else null,
     )
 
     private fun appVersion(context: Context): String? = try {

@@ -384,7 +384,7 @@ class MainActivity : Activity() {
         render()
     }
 
-    private fun openCamera(setup: DepthCameraSource.Setup, cb: io.ecvo.shared.SourceCallbacks): DepthCameraSource {
+    private fun openCamera(setup: DepthCameraSource.Setup, cb: io.ecvo.shared.SourceCallbacks): io.ecvo.shared.SourceHandle {
         SessionHolder.previewSize = setup.frame.width to setup.frame.height
         val app = applicationContext
         val source = DepthCameraSource(
@@ -402,7 +402,29 @@ class MainActivity : Activity() {
         )
         SessionHolder.replay = null
         SessionHolder.camera = source
-        return source.start()
+        val camera = source.start()
+        // The gyroscope runs exactly as long as the camera: the handle the controller stops
+        // (pause, reset, restart) unregisters it too.
+        val gyro = GyroSensor.start(this, setup.sensorOrientation, setup.backFacing, GyroTarget)
+        // The samples reach the tracker in the depth camera's axes (recorded in the device's).
+        controller.session?.imuRotation = if (gyro) GyroSensor.rotationCameraDevice else null
+        if (gyro && GyroSensor.rateLimited) {
+            cb.notice("The gyroscope is limited to 200 Hz on this phone (the fastest rate was refused).")
+        }
+        return GyroHandle(app, camera)
+    }
+
+    /** The current session's gyroscope buffer, looked up at each sample (a session may be replaced). */
+    private object GyroTarget : GyroSensor.Target {
+        override fun buffer() = SessionHolder.controller.session?.gyro
+    }
+
+    /** Stops the gyroscope with the camera it runs beside. */
+    private class GyroHandle(private val app: android.content.Context, private val camera: io.ecvo.shared.SourceHandle) : io.ecvo.shared.SourceHandle {
+        override fun stop() {
+            GyroSensor.stop(app)
+            camera.stop()
+        }
     }
 
     private fun setRecording(on: Boolean) {
@@ -412,7 +434,9 @@ class MainActivity : Activity() {
             val meta = { cam: CameraIntrinsics ->
                 DeviceInfo.metadata(this, settings, controller.presenter.status.mode.ifEmpty { null }, cam)
             }
-            if (controller.startRecording { cam -> StreamRecorder(dir, cam).also { meta(cam).write(dir) } }) SessionHolder.streams.onRecording(dir)
+            // With a gyroscope, camera.json carries its calibration and imu.txt is written beside the frames.
+            val imu = GyroSensor.rotationCameraDevice?.let { r -> controller.session?.imuCalibration(r) }
+            if (controller.startRecording { cam -> StreamRecorder(dir, cam, imu).also { meta(cam).write(dir) } }) SessionHolder.streams.onRecording(dir)
         } else {
             // Returns at once; the queue drains on the recorder's thread, then the toast.
             val app = applicationContext

@@ -68,13 +68,17 @@ data class CameraIntrinsics(
     fun cropped(x0: Int, y0: Int, w: Int, h: Int): CameraIntrinsics =
         copy(width = w, height = h, cx = cx - x0, cy = cy - y0)
 
-    /** `camera.json` text in the layout the host tools write (pretty-printed, integers for the size). */
-    fun toJson(): String {
+    /**
+     * `camera.json` text in the layout the host tools write (pretty-printed, integers for
+     * the size), with the IMU's calibration as its `imu` object when [imu] is given.
+     */
+    fun toJson(imu: ImuCalibration? = null): String {
         for ((k, v) in listOf("fx" to fx, "fy" to fy, "cx" to cx, "cy" to cy, "depth_scale" to depthScale)) {
             require(v.isFinite()) { "$k: $v cannot be written to JSON" }
         }
         return "{\n  \"width\": $width,\n  \"height\": $height,\n  \"fx\": $fx,\n  \"fy\": $fy,\n" +
-            "  \"cx\": $cx,\n  \"cy\": $cy,\n  \"depth_scale\": $depthScale\n}\n"
+            "  \"cx\": $cx,\n  \"cy\": $cy,\n  \"depth_scale\": $depthScale" +
+            (imu?.let { ",\n  \"imu\": ${it.toJson()}" } ?: "") + "\n}\n"
     }
 
     companion object {

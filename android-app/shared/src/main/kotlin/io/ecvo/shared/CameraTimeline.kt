@@ -63,6 +63,15 @@ class CameraTimeline(
         return rawNs + offset
     }
 
+    /**
+     * A time [rawNs] on the current camera instance's clock (a gyroscope sample's, put on
+     * that clock by [CameraClock]) on the timeline, with the offset [map] gave that
+     * instance's frames; null before the instance's first frame (its offset is not fixed
+     * yet).
+     */
+    @Synchronized
+    fun mapInstant(rawNs: Long): Long? = if (pendingStart) null else rawNs + offset
+
     /** The tracker took the frame [map] gave [mappedNs], which arrived at [arrivalNs]. */
     @Synchronized
     fun accepted(mappedNs: Long, arrivalNs: Long) {

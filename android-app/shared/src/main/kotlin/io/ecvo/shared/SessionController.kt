@@ -60,6 +60,12 @@ class SessionController(
     private val nativeLibraryError: () -> String? = { Tracker.nativeLibraryError() },
     private val post: (() -> Unit) -> Unit,
     private val nowNs: () -> Long = System::nanoTime,
+    /**
+     * CLOCK_MONOTONIC (`System.nanoTime`), read beside [nowNs] (in the app
+     * `elapsedRealtimeNanos`, the sensors' clock) to find which clock a camera with an
+     * UNKNOWN timestamp source uses ([CameraClock]).
+     */
+    private val monotonicNs: () -> Long = System::nanoTime,
 ) {
     val presenter = TrackingPresenter()
     val trajectory = TrajectoryBuffer()
@@ -136,14 +142,25 @@ class SessionController(
         if (!isCurrent(t)) return
         val s = session ?: return
         try {
-            s.push(timestampNs, depthMm, intensity, if (kind == FrameSource.LIVE) nowNs() else timestampNs)
+            if (kind == FrameSource.LIVE) {
+                val arrival = nowNs()
+                s.push(timestampNs, depthMm, intensity, arrival, monotonicNs())
+            } else {
+                s.push(timestampNs, depthMm, intensity, timestampNs)
+            }
         } catch (e: Exception) {
             onSourceFailed(t, describe("Tracking stopped", e))
         }
     }
 
     internal fun onCameraStarted(t: Long, realtimeClock: Boolean) {
-        if (isCurrent(t)) session?.timeline?.newInstance(realtimeClock)
+        if (!isCurrent(t)) return
+        val s = session ?: return
+        s.timeline.newInstance(realtimeClock)
+        // Each camera instance's clock is matched to the sensors' afresh; samples
+        // waiting from before it cannot be placed on its timeline.
+        s.gyro.clear()
+        s.cameraClock = CameraClock(realtimeClock, CameraClock.bracket(nowNs, monotonicNs))
     }
 
     internal fun onSourceFailed(t: Long, message: String) = post { fail(t, message) }

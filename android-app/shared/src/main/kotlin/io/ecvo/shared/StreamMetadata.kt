@@ -8,7 +8,7 @@ import java.util.Locale
  * `metadata.json` beside a recording's lists and in a session's export: what a tester or
  * the host tools need to know about where a stream came from. The device and Android
  * version, the app's version, the settings it ran with (string pairs, as stored), the live
- * mode, the frames' intrinsics, and gravity: world up in the first camera's frame (the
+ * mode, the frames' intrinsics, how the gyroscope's clock was matched, and gravity: world up in the first camera's frame (the
  * tracker's world), so that a replay draws the same gravity-aligned top view as the live
  * session. Every field but [device] may be missing; readers ignore what they do not know.
  */
@@ -27,6 +27,8 @@ data class StreamMetadata(
     val camera: CameraIntrinsics? = null,
     /** World up as a unit vector in the first camera's frame, or null (not measured). */
     val gravityUp: DoubleArray? = null,
+    /** How the gyroscope's clock was put on the frames' ([CameraClock.Method] label), or null (no gyroscope). */
+    val imuClock: String? = null,
 ) {
     init {
         require(gravityUp == null || (gravityUp.size == 3 && gravityUp.all { it.isFinite() })) { "gravityUp must be 3 finite numbers" }
@@ -38,6 +40,7 @@ data class StreamMetadata(
         android?.let { append(",\n  \"android\": ").append(quote(it)) }
         app?.let { append(",\n  \"app\": ").append(quote(it)) }
         liveMode?.let { append(",\n  \"live_mode\": ").append(quote(it)) }
+        imuClock?.let { append(",\n  \"imu_clock\": ").append(quote(it)) }
         gravityUp?.let { g -> append(",\n  \"gravity_up\": [").append(g.joinToString(", ") { String.format(Locale.ROOT, "%.6f", it) }).append(']') }
         camera?.let { c ->
             append(",\n  \"camera\": {\"width\": ${c.width}, \"height\": ${c.height}, \"fx\": ${c.fx}, \"fy\": ${c.fy}, \"cx\": ${c.cx}, \"cy\": ${c.cy}, \"depth_scale\": ${c.depthScale}}")
@@ -81,6 +84,7 @@ data class StreamMetadata(
                 liveMode = str("live_mode"),
                 camera = cam,
                 gravityUp = g?.toDoubleArray(),
+                imuClock = str("imu_clock"),
             )
         }
 

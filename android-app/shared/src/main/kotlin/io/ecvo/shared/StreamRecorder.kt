@@ -13,7 +13,8 @@ import java.io.Writer
  * (`timestamp filename` lines under `#` headers, timestamps in seconds with 6 decimals),
  * `rgb/<ts>.png` (8-bit gray intensity), `depth/<ts>.png` (16-bit gray, [camera]'s
  * `depthScale` units per metre; millimetres for a phone) and optionally
- * `groundtruth.txt`.
+ * `groundtruth.txt`. With an IMU, `camera.json` carries its calibration ([imu]) and the
+ * session writes `imu.txt` beside the lists ([ImuRecorder]).
  *
  * Each frame's PNGs are written before its list lines, and the lists are flushed after
  * every frame, so a recording cut short is still a readable stream up to its last
@@ -23,7 +24,12 @@ import java.io.Writer
  * @throws IOException if [dir] already holds a stream (`rgb.txt` or `depth.txt`) or
  *   cannot be created.
  */
-class StreamRecorder(override val dir: File, val camera: CameraIntrinsics) : FrameRecorder {
+class StreamRecorder(
+    override val dir: File,
+    val camera: CameraIntrinsics,
+    /** The IMU's calibration, written into `camera.json` when the session records `imu.txt` ([ImuRecorder]). */
+    val imu: ImuCalibration? = null,
+) : FrameRecorder {
     private val rgbList: Writer
     private val depthList: Writer
     private val rgbOut: FileOutputStream
@@ -48,7 +54,7 @@ class StreamRecorder(override val dir: File, val camera: CameraIntrinsics) : Fra
         for (d in listOf(dir, File(dir, "rgb"), File(dir, "depth"))) {
             if (!d.isDirectory && !d.mkdirs()) throw IOException("cannot create folder $d")
         }
-        File(dir, CameraIntrinsics.FILE_NAME).writeText(camera.toJson())
+        File(dir, CameraIntrinsics.FILE_NAME).writeText(camera.toJson(imu))
         rgbOut = FileOutputStream(File(dir, "rgb.txt"))
         depthOut = FileOutputStream(File(dir, "depth.txt"))
         rgbList = OutputStreamWriter(rgbOut, Charsets.UTF_8)

@@ -18,10 +18,11 @@ class MetadataTest {
         val m = StreamMetadata(
             device = "samsung SM-G977N \"5G\"", android = "Android 12 (API 31)", app = "0.1.0",
             settings = AppSettings().rememberDepthOnly("0+1").toMap(), liveMode = "depth only", camera = cam,
-            gravityUp = doubleArrayOf(0.0, -0.994522, 0.104528),
+            gravityUp = doubleArrayOf(0.0, -0.994522, 0.104528), imuClock = "monotonic",
         )
         val back = StreamMetadata.fromJson(m.toJson())
         assertEquals(m, back)
+        assertEquals("monotonic", back.imuClock)
         assertArrayEquals(doubleArrayOf(0.0, -0.994522, 0.104528), back.gravityUp, 1e-9)
         assertEquals("0+1", AppSettings.fromMap(back.settings).depthOnlyPairs.single())
         assertEquals(cam, back.camera)

@@ -34,6 +34,12 @@ class FakeTracker(private val window: Int = Int.MAX_VALUE, private val statuses:
         return statuses(pushed.size - 1)
     }
     override fun getPose(out: FloatArray): Long { check(!closed); return if (pushed.isEmpty()) Tracker.NO_POSE else pushed.last() }
+    /** Gyroscope samples pushed: (timestamp, wx, wy, wz). */
+    val imu = ArrayList<DoubleArray>()
+    override fun pushImu(timestampsNs: LongArray, rates: FloatArray, count: Int) {
+        check(!closed) { "Tracker is closed" }
+        for (i in 0 until count) imu += doubleArrayOf(timestampsNs[i].toDouble(), rates[3 * i].toDouble(), rates[3 * i + 1].toDouble(), rates[3 * i + 2].toDouble())
+    }
     override val state: TrackingState get() = if (pushed.isEmpty()) TrackingState.INITIALISING else TrackingState.TRACKING
     private val start: Int get() = maxOf(0, pushed.size - window)
     override fun stats(): TrackerStats = TrackerStats.EMPTY.copy(
