@@ -38,6 +38,9 @@ while [ $# -gt 0 ]; do
         *) echo "build-wheels.sh: unknown argument $1" >&2; exit 2 ;;
     esac
 done
+# Absolute: maturin runs from rust/ecvo-py, where a relative --out would land.
+mkdir -p "$OUT"
+OUT="$(cd "$OUT" && pwd)"
 
 command -v cargo >/dev/null || { echo "build-wheels.sh: cargo not found (a Rust toolchain is needed)" >&2; exit 1; }
 installed="$(rustup target list --installed 2>/dev/null || rustc --print target-list)"
