@@ -67,8 +67,9 @@ def test_information_grows_with_texture(seq):
     smallest = [np.linalg.eigvalsh(h)[0] for h in hs]
     assert all(a > b for a, b in zip(logdet, logdet[1:])), logdet
     assert all(a > b for a, b in zip(smallest, smallest[1:])), smallest
-    # Measured: the smallest eigenvalue falls about 100-fold from k = 1 to k = 0.
-    assert smallest[0] > 20 * smallest[-1], smallest
+    # Measured: the smallest eigenvalue falls about 19-fold from k = 1 to k = 0 with
+    # keyframe tracking, the default (about 100-fold with the chain).
+    assert smallest[0] > 10 * smallest[-1], smallest
 
 
 def test_every_lost_frame_has_a_reason(seq):
