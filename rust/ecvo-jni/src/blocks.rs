@@ -144,7 +144,9 @@ unsafe impl GlobalAlloc for Blocks {
             // SAFETY: both small: `System`'s block, resized by `System`.
             unsafe { System.realloc(ptr, layout, new_size) }
         } else {
-            #[cfg(any(target_os = "linux", target_os = "android"))]
+            // Linux only: the libc crate does not declare `mremap` for Android (bionic
+            // has it; Android takes the copy below).
+            #[cfg(target_os = "linux")]
             if old_mapped && new_mapped {
                 // SAFETY: both large: `ptr` is our mapping of `layout.size()` bytes,
                 // moved or resized whole.
