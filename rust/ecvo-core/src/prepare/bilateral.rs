@@ -47,20 +47,7 @@ pub(crate) fn load_padded(
     range: DepthRange,
     padded: &mut Vec<f32>,
 ) {
-    let pw = w + 2 * radius;
-    let len = pw * (h + 2 * radius);
-    if padded.len() != len {
-        padded.clear();
-        padded.resize(len, 0.0);
-    }
-    for (dst, src) in padded[radius * pw..]
-        .chunks_exact_mut(pw)
-        .zip(raw.chunks_exact(w))
-    {
-        for (d, &z) in dst[radius..radius + w].iter_mut().zip(src) {
-            *d = range.metres(z, 0.0);
-        }
-    }
+    fill_padded(raw, w, h, radius, padded, |z| range.metres(z, 0.0));
 }
 
 /// [`load_padded`] from depth already in metres (NaN where missing): a coarser
@@ -73,6 +60,22 @@ pub(crate) fn load_padded_metres(
     radius: usize,
     padded: &mut Vec<f32>,
 ) {
+    fill_padded(depth, w, h, radius, padded, |z| {
+        if z.is_nan() { 0.0 } else { z }
+    });
+}
+
+/// The interior of a padded buffer (`radius` zeros on every side, written when the
+/// buffer is (re)sized) from `src`, `w` x `h`, each pixel through `metres`.
+#[inline(always)]
+fn fill_padded<T: Copy>(
+    src: &[T],
+    w: usize,
+    h: usize,
+    radius: usize,
+    padded: &mut Vec<f32>,
+    metres: impl Fn(T) -> f32,
+) {
     let pw = w + 2 * radius;
     let len = pw * (h + 2 * radius);
     if padded.len() != len {
@@ -81,10 +84,10 @@ pub(crate) fn load_padded_metres(
     }
     for (dst, src) in padded[radius * pw..]
         .chunks_exact_mut(pw)
-        .zip(depth.chunks_exact(w))
+        .zip(src.chunks_exact(w))
     {
         for (d, &z) in dst[radius..radius + w].iter_mut().zip(src) {
-            *d = if z.is_nan() { 0.0 } else { z };
+            *d = metres(z);
         }
     }
 }
