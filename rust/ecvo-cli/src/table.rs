@@ -1,5 +1,9 @@
 //! `ecvo table`: the paper's Table 1 (naive, L1, L2) for a set of sequences, at one
-//! or more frame steps (every Nth frame: the robustness suite for fast motion).
+//! or more frame steps (every Nth frame: the robustness suite for fast motion). With
+//! keyframe tracking (the default) the level-1 references are the keyframes, and the
+//! motion estimations count each frame's registration, the fusion of each new
+//! keyframe with the chain and the fall-backs to the previous frame, which get their
+//! own column.
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -56,8 +60,16 @@ pub fn table_command(
                 } else {
                     String::new()
                 };
+                // Keyframe tracking needs a reference level: the naive rows (and
+                // `--tracking chain`) register against the previous frame.
+                let keyframes = t.config.keyframes && !t.config.reference_levels.is_empty();
+                let kf = if keyframes {
+                    format!("{}/{}", c.keyframe_fusions, c.keyframe_fallbacks)
+                } else {
+                    "-".to_string()
+                };
                 rows.push(format!(
-                    "| {step} | {} | {name} | {} | {}{lost} | {refs} | {:.2} |",
+                    "| {step} | {} | {name} | {} | {}{lost} | {refs} | {kf} | {:.2} |",
                     c.frames,
                     ate.map_or("n/a".to_string(), |a| format!("{a:.4}")),
                     c.motion_estimations,
@@ -76,6 +88,11 @@ pub fn table_command(
                         "recovered_frames": c.recovered_frames,
                         "failed_corrections": c.failed_corrections,
                         "rejected_corrections": c.rejected_corrections,
+                        "keyframes": keyframes,
+                        "keyframe_fusions": c.keyframe_fusions,
+                        "keyframe_fallbacks": c.keyframe_fallbacks,
+                        "overlap_keyframes": c.overlap_keyframes,
+                        "keyframe_spread_refusals": c.keyframe_spread_refusals,
                         "ms_per_frame": s.total.mean,
                         "filter_ms": s.filter.mean,
                         "tracker_ms": s.tracker.mean,
@@ -97,9 +114,9 @@ pub fn table_command(
         );
         let _ = writeln!(
             out,
-            "| frame step | frames | method | ATE RMSE (m) | motion estimations | references L1/L2 | ms per frame |"
+            "| frame step | frames | method | ATE RMSE (m) | motion estimations | references L1/L2 | keyframe fusions/fallbacks | ms per frame |"
         );
-        let _ = writeln!(out, "|---|---|---|---|---|---|---|");
+        let _ = writeln!(out, "|---|---|---|---|---|---|---|---|");
         for r in rows {
             let _ = writeln!(out, "{r}");
         }

@@ -217,7 +217,7 @@ fn table_prints_the_three_rows_per_frame_step() {
     let text = String::from_utf8(o.stdout).unwrap();
     assert!(
         text.contains(
-            "| frame step | frames | method | ATE RMSE (m) | motion estimations | references L1/L2 | ms per frame |"
+            "| frame step | frames | method | ATE RMSE (m) | motion estimations | references L1/L2 | keyframe fusions/fallbacks | ms per frame |"
         ),
         "{text}"
     );
@@ -237,7 +237,7 @@ fn table_prints_the_three_rows_per_frame_step() {
         .lines()
         .find(|l| l.starts_with("| 1 | 20 | naive |"))
         .unwrap();
-    assert!(naive.contains("| 19 | - |"), "{naive}");
+    assert!(naive.contains("| 19 | - | - |"), "{naive}");
     // One JSON object per row.
     let rows: Vec<serde_json::Value> = std::fs::read_to_string(&json)
         .unwrap()
@@ -245,6 +245,38 @@ fn table_prints_the_three_rows_per_frame_step() {
         .map(|l| serde_json::from_str(l).unwrap())
         .collect();
     assert_eq!(rows.len(), 6);
+    // Keyframe tracking (the default) in the L1 and L2 rows: every frame after the
+    // first is registered once, each new keyframe (a level-1 reference, after the
+    // first frame) is fused once with the chain through the previous frame, and the
+    // table's column says so; the naive rows register against the previous frame.
+    for r in &rows {
+        let naive = r["mode"] == "naive";
+        assert_eq!(r["keyframes"], !naive, "{r}");
+        let fusions = r["keyframe_fusions"].as_u64().unwrap();
+        let fallbacks = r["keyframe_fallbacks"].as_u64().unwrap();
+        let frames = r["frames"].as_u64().unwrap();
+        let calls = r["motion_estimations"].as_u64().unwrap();
+        if naive {
+            assert_eq!((fusions, fallbacks), (0, 0), "{r}");
+            assert_eq!(calls, frames - 1, "{r}");
+        } else {
+            let keyframes = r["references"][0].as_u64().unwrap();
+            assert!(fusions <= keyframes, "{r}");
+            assert!(calls >= frames - 1 + fusions + fallbacks, "{r}");
+            let cell = format!("| {fusions}/{fallbacks} |");
+            let line = text
+                .lines()
+                .find(|l| {
+                    l.starts_with(&format!(
+                        "| {} | 20 | {} |",
+                        r["frame_step"],
+                        r["mode"].as_str().unwrap()
+                    ))
+                })
+                .unwrap();
+            assert!(line.contains(&cell), "{cell} in {line}");
+        }
+    }
     assert_eq!(rows[3]["frame_step"], 2);
     assert_eq!(rows[3]["frames"], 20);
     assert!(
