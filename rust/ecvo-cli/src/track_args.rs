@@ -273,6 +273,7 @@ impl TrackArgs {
                 LookupDepthArg::Bilateral => ecvo_core::LookupDepth::Bilateral,
             }),
             keyframe_fuse_every: self.keyframe_fuse_every,
+            imu_fusion: self.imu_fusion.then_some(true),
         };
         TrackSettings {
             frame_step: self.frame_step as usize,
@@ -292,7 +293,6 @@ impl TrackArgs {
             strict: self.strict,
             allow_outside: self.allow_outside,
             max_memory: limits.max_memory,
-            imu_fusion: self.imu_fusion,
             imu: match (&self.imu, self.no_imu) {
                 (_, true) => crate::imu::ImuSource::Off,
                 (Some(p), false) => crate::imu::ImuSource::File(p.clone()),

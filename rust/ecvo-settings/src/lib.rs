@@ -69,6 +69,9 @@ pub struct Settings {
     pub lookup_depth: Option<ecvo_core::LookupDepth>,
     /// Fuse every Nth frame after the keyframe with the chain (0: off).
     pub keyframe_fuse_every: Option<u32>,
+    /// With a gyroscope, fuse its rotation into each believed registration
+    /// ([`Config::imu_fusion`]; `None`: the engine's default, off).
+    pub imu_fusion: Option<bool>,
     /// The memory budget in bytes (`None`: the engine's default).
     pub memory_budget: Option<usize>,
 }
@@ -182,6 +185,7 @@ impl Settings {
             keyframe_max_spread_growth: None,
             lookup_depth: None,
             keyframe_fuse_every: None,
+            imu_fusion: None,
             memory_budget: None,
         }
     }
@@ -256,6 +260,9 @@ impl Settings {
         }
         if let Some(f) = self.keyframe_max_spread_growth {
             config.keyframe_max_spread_growth = f;
+        }
+        if let Some(f) = self.imu_fusion {
+            config.imu_fusion = f;
         }
         if let Some(text) = &self.levels {
             config.reference_levels = parse_levels(text).map_err(|e| parse("levels", text, e))?;
@@ -358,5 +365,22 @@ mod tests {
         .config(camera())
         .unwrap();
         assert_eq!(c.memory_budget, 1);
+    }
+
+    #[test]
+    fn imu_settings_default_to_the_engines_and_apply() {
+        let engine = Config::new(camera(), Preset::Pc, Mode::L2);
+        assert!(!engine.imu_fusion, "the engine's default is off");
+        let c = Settings::default().config(camera()).unwrap();
+        assert_eq!(c.imu_fusion, engine.imu_fusion);
+        for on in [true, false] {
+            let c = Settings {
+                imu_fusion: Some(on),
+                ..Settings::default()
+            }
+            .config(camera())
+            .unwrap();
+            assert_eq!(c.imu_fusion, on);
+        }
     }
 }
