@@ -87,6 +87,8 @@ pub struct EngineChoice {
     pub keyframe_fuse_every: Option<u32>,
     /// Fuse the gyro's rotation into each registration (`Config::imu_fusion`).
     pub imu_fusion: Option<bool>,
+    /// The gyro's rotation as a prior term in `MOTION` (`Config::imu_prior_term`).
+    pub imu_prior_term: Option<bool>,
 }
 
 impl EngineChoice {
@@ -241,6 +243,7 @@ impl TrackSettings {
             lookup_depth: e.lookup_depth,
             keyframe_fuse_every: e.keyframe_fuse_every,
             imu_fusion: e.imu_fusion,
+            imu_prior_term: e.imu_prior_term,
             memory_budget: self.max_memory,
         }
     }

@@ -72,6 +72,9 @@ pub struct Settings {
     /// With a gyroscope, fuse its rotation into each believed registration
     /// ([`Config::imu_fusion`]; `None`: the engine's default, off).
     pub imu_fusion: Option<bool>,
+    /// With a gyroscope, its rotation is also a prior term in `MOTION`'s normal
+    /// equations ([`Config::imu_prior_term`]; `None`: the engine's default).
+    pub imu_prior_term: Option<bool>,
     /// The memory budget in bytes (`None`: the engine's default).
     pub memory_budget: Option<usize>,
 }
@@ -186,6 +189,7 @@ impl Settings {
             lookup_depth: None,
             keyframe_fuse_every: None,
             imu_fusion: None,
+            imu_prior_term: None,
             memory_budget: None,
         }
     }
@@ -263,6 +267,9 @@ impl Settings {
         }
         if let Some(f) = self.imu_fusion {
             config.imu_fusion = f;
+        }
+        if let Some(f) = self.imu_prior_term {
+            config.imu_prior_term = f;
         }
         if let Some(text) = &self.levels {
             config.reference_levels = parse_levels(text).map_err(|e| parse("levels", text, e))?;
@@ -373,6 +380,7 @@ mod tests {
         assert!(!engine.imu_fusion, "the engine's default is off");
         let c = Settings::default().config(camera()).unwrap();
         assert_eq!(c.imu_fusion, engine.imu_fusion);
+        assert_eq!(c.imu_prior_term, engine.imu_prior_term);
         for on in [true, false] {
             let c = Settings {
                 imu_fusion: Some(on),
@@ -381,6 +389,13 @@ mod tests {
             .config(camera())
             .unwrap();
             assert_eq!(c.imu_fusion, on);
+            let c = Settings {
+                imu_prior_term: Some(on),
+                ..Settings::default()
+            }
+            .config(camera())
+            .unwrap();
+            assert_eq!(c.imu_prior_term, on);
         }
     }
 }
