@@ -430,7 +430,9 @@ pub struct Config {
     /// the previous frame's pose), weighted by its covariance: the white noise over
     /// the interval and the bias estimate's spread
     /// ([`MotionConfig::rotation_prior_information`]), besides seeding the coarsest
-    /// step. `docs/imu.md` has the measurement that sets the default.
+    /// step. On by default: with it, against seeding alone, fr1/desk and fr1/xyz
+    /// half at steps 1-4 with six simulated gyros gave ATE geometric means of 0.825
+    /// and 0.971, the pan suite 0.927 (`docs/imu.md`). No effect without samples.
     pub imu_prior_term: bool,
 }
 
@@ -511,7 +513,7 @@ impl Config {
             memory_budget: DEFAULT_MEMORY_BUDGET,
             imu: ImuCalibration::default(),
             imu_fusion: false,
-            imu_prior_term: false,
+            imu_prior_term: true,
         }
     }
 
