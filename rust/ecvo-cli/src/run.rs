@@ -185,7 +185,6 @@ pub fn track(
     if let Some(s) = &imu {
         config.imu = s.calibration;
     }
-    config.imu_fusion = settings.imu_fusion;
     let opts = EngineOptions {
         imu: imu.clone(),
         max_frames: settings.max_frames,

@@ -43,8 +43,6 @@ pub struct TrackSettings {
     pub max_memory: Option<usize>,
     /// Which IMU stream to use.
     pub imu: crate::imu::ImuSource,
-    /// Fuse the gyro's rotation into each registration (`Config::imu_fusion`).
-    pub imu_fusion: bool,
 }
 
 /// The engine's method: ecvo's defaults, or the paper's as written, with single
@@ -87,6 +85,10 @@ pub struct EngineChoice {
     pub lookup_depth: Option<ecvo_core::LookupDepth>,
     /// Fuse every Nth frame after the keyframe with the chain (0: off).
     pub keyframe_fuse_every: Option<u32>,
+    /// Fuse the gyro's rotation into each registration (`Config::imu_fusion`).
+    pub imu_fusion: Option<bool>,
+    /// The gyro's rotation as a prior term in `MOTION` (`Config::imu_prior_term`).
+    pub imu_prior_term: Option<bool>,
 }
 
 impl EngineChoice {
@@ -240,6 +242,8 @@ impl TrackSettings {
             keyframe_max_spread_growth: e.keyframe_max_spread_growth,
             lookup_depth: e.lookup_depth,
             keyframe_fuse_every: e.keyframe_fuse_every,
+            imu_fusion: e.imu_fusion,
+            imu_prior_term: e.imu_prior_term,
             memory_budget: self.max_memory,
         }
     }

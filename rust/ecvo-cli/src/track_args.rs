@@ -88,6 +88,15 @@ pub(crate) struct TrackArgs {
     /// weighed by the two covariances, besides starting the registration from it.
     #[arg(help_heading = "Tuning", display_order = 39, long)]
     pub(crate) imu_fusion: bool,
+    /// With a gyroscope: its rotation is also a prior term in the normal equations
+    /// of each registration it starts, weighted by its covariance (`docs/imu.md`).
+    #[arg(
+        help_heading = "Tuning",
+        display_order = 40,
+        long,
+        value_name = "true|false"
+    )]
+    pub(crate) imu_prior_term: Option<bool>,
     /// What an accepted correction does to the frame-to-frame chain: fuse (weighed by
     /// their covariances) or replace (the paper's).
     #[arg(help_heading = "Tuning", display_order = 25, long, value_enum)]
@@ -273,6 +282,8 @@ impl TrackArgs {
                 LookupDepthArg::Bilateral => ecvo_core::LookupDepth::Bilateral,
             }),
             keyframe_fuse_every: self.keyframe_fuse_every,
+            imu_fusion: self.imu_fusion.then_some(true),
+            imu_prior_term: self.imu_prior_term,
         };
         TrackSettings {
             frame_step: self.frame_step as usize,
@@ -292,7 +303,6 @@ impl TrackArgs {
             strict: self.strict,
             allow_outside: self.allow_outside,
             max_memory: limits.max_memory,
-            imu_fusion: self.imu_fusion,
             imu: match (&self.imu, self.no_imu) {
                 (_, true) => crate::imu::ImuSource::Off,
                 (Some(p), false) => crate::imu::ImuSource::File(p.clone()),

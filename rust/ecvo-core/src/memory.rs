@@ -4,7 +4,8 @@
 //! Every buffer the engine uses is sized by the image and the schedule alone: the
 //! prepared frames (image pyramid of interleaved samples, normals, template points),
 //! the preparer's scratch (padded and smoothed depth, masks, per-level planes) and
-//! MOTION's scratch (per-chunk residuals). [`estimate`] adds them up from the
+//! MOTION's scratch (per-chunk residuals), and the gyroscope's ring of samples
+//! ([`imu_bytes`], allocated at the first `push_imu`). [`estimate`] adds them up from the
 //! [`Config`] with the same formulas the buffers are sized by, rounded up (a vector
 //! grown by `push` is counted at twice its length), so that it is an upper bound of
 //! the bytes [`crate::Odometry`] ever has outstanding (`tests/memory.rs` checks it
@@ -36,8 +37,11 @@ pub struct MemoryEstimate {
     pub preparer_bytes: usize,
     /// One motion estimator's scratch buffers.
     pub estimator_bytes: usize,
-    /// The total: `frames * frame_bytes + preparer_bytes + estimator_bytes`, plus a
-    /// margin of 1/64 of that and [`FIXED_BYTES`].
+    /// The tracker's ring of gyroscope samples ([`imu_bytes`]), counted whether or
+    /// not samples will be pushed.
+    pub imu_bytes: usize,
+    /// The total: `frames * frame_bytes + preparer_bytes + estimator_bytes +
+    /// imu_bytes`, plus a margin of 1/64 of that and [`FIXED_BYTES`].
     pub bytes: usize,
 }
 
@@ -49,16 +53,19 @@ pub fn estimate(config: &Config) -> MemoryEstimate {
     let frames = max_prepared_frames(config);
     let preparer_bytes = preparer_bytes(config);
     let estimator_bytes = estimator_bytes(config);
+    let imu_bytes = imu_bytes();
     MemoryEstimate {
         frame_bytes,
         frames,
         preparer_bytes,
         estimator_bytes,
+        imu_bytes,
         bytes: with_margin(
             frames
                 .saturating_mul(frame_bytes)
                 .saturating_add(preparer_bytes)
-                .saturating_add(estimator_bytes),
+                .saturating_add(estimator_bytes)
+                .saturating_add(imu_bytes),
         ),
     }
 }
@@ -183,6 +190,12 @@ fn finisher_bytes(config: &Config, scratch: usize) -> usize {
         .map(|(_, (w, h))| w * h * size_of::<Sample>())
         .sum();
     scratch + budgeted
+}
+
+/// The tracker's ring of gyroscope samples ([`crate::imu::RING_CAPACITY`] of
+/// them), allocated once at the first `push_imu` whatever the configuration.
+pub fn imu_bytes() -> usize {
+    crate::imu::RING_CAPACITY * size_of::<crate::imu::GyroSample>()
 }
 
 /// One motion estimator's scratch for the largest template of `config`'s schedule

@@ -4,10 +4,13 @@
 //! from the documented minimum (8x8) to 1280x720, and the estimate must cover it (and
 //! not be more than about twice it, so that a budget check means something). Also:
 //! the budget refuses before allocating, and every size from the minimum runs without
-//! a configuration error.
+//! a configuration error. The gyroscope's ring is part of the estimate: the frames
+//! are tracked with a 400 Hz IMU stream, and what the first `push_imu` allocates is
+//! checked against [`memory::imu_bytes`].
 
 use std::sync::atomic::Ordering;
 
+use ecvo_core::imu::GyroSample;
 use ecvo_core::memory::{self, MB};
 use ecvo_core::{Camera, Config, Error, FrameView, Mode, Odometry, Preset};
 
@@ -68,9 +71,25 @@ fn peak_of(run: impl FnOnce()) -> usize {
     PEAK.load(Ordering::Relaxed) - base
 }
 
+/// Gyro samples at 400 Hz from `t0` (inclusive) to `t1` (exclusive), turning slowly.
+fn gyro(t0: f64, t1: f64) -> Vec<GyroSample> {
+    let first = (t0 * 400.0).ceil() as usize;
+    let last = (t1 * 400.0).ceil() as usize;
+    (first..last)
+        .map(|i| GyroSample {
+            t: i as f64 / 400.0,
+            w: [0.0, 0.01, 0.0],
+        })
+        .collect()
+}
+
 fn track(config: &Config, frames: &[(Vec<u8>, Vec<u16>)]) {
     let mut odo = Odometry::new(config.clone()).expect("a valid configuration");
     for (k, (g, d)) in frames.iter().enumerate() {
+        // The gyro's samples up to the frame, as a sensor callback would give them.
+        let t = k as f64 / 30.0;
+        odo.push_imu(&gyro(t - 1.0 / 30.0, t + 0.001))
+            .expect("finite samples");
         odo.push(FrameView {
             timestamp: k as f64 / 30.0,
             intensity: g,
@@ -132,6 +151,41 @@ fn the_estimate_bounds_what_odometry_allocates() {
             }
         }
     }
+}
+
+#[test]
+fn the_gyro_ring_is_counted_and_allocated_once() {
+    let _serial = serial();
+    let config = Config::new(camera(64, 48), Preset::Phone, Mode::L2);
+    let est = memory::estimate(&config);
+    assert_eq!(est.imu_bytes, memory::imu_bytes());
+    assert_eq!(
+        est.bytes,
+        memory::with_margin(
+            est.frames * est.frame_bytes + est.preparer_bytes + est.estimator_bytes + est.imu_bytes
+        ),
+        "the ring is in the total: {est:?}"
+    );
+    let mut odo = Odometry::new(config).expect("valid");
+    let samples = gyro(0.0, 10.0);
+    let base = CURRENT.load(Ordering::Relaxed);
+    odo.push_imu(&samples[..10]).unwrap();
+    let ring = CURRENT.load(Ordering::Relaxed) - base;
+    // 4000 more samples wrap the ring several times: nothing more is allocated.
+    odo.push_imu(&samples[10..]).unwrap();
+    let all = CURRENT.load(Ordering::Relaxed) - base;
+    println!(
+        "gyro ring: {ring} bytes at the first push, {all} after {} samples; counted {}",
+        samples.len(),
+        est.imu_bytes
+    );
+    assert!(ring > 0, "the first push allocates the ring");
+    assert_eq!(all, ring, "allocated once");
+    assert!(
+        ring <= est.imu_bytes && 2 * ring > est.imu_bytes,
+        "ring {ring} bytes against {} counted",
+        est.imu_bytes
+    );
 }
 
 #[test]

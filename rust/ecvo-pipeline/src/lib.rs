@@ -322,7 +322,8 @@ impl Pipeline {
     /// without allocating: an upper bound of its pooled prepared frames (previous,
     /// references, the queues' and stages' frames), its raw input buffers, the
     /// preparer's and the two motion estimators' scratch ([`ecvo_core::memory`]), the
-    /// geometry stage's cloud, and the outputs channel and trajectory window when
+    /// tracker's gyro ring and the IMU inbox ([`IMU_INBOX_CAPACITY`]), the geometry
+    /// stage's cloud, and the outputs channel and trajectory window when
     /// they are bounded. [`Pipeline::new`] refuses a configuration whose need exceeds
     /// [`Config::memory_budget`] ([`ecvo_core::Error::MemoryBudget`]) before it
     /// allocates anything.
@@ -336,6 +337,10 @@ impl Pipeline {
         let frames = frame_pool_capacity(config, options) * memory::prepared_frame_bytes(config);
         let raw = raw_pool_capacity(options) * (n * (size_of::<u8>() + size_of::<u16>()));
         let scratch = memory::preparer_bytes(config) + 2 * memory::estimator_bytes(config);
+        // The tracker's gyro ring and the inbox in front of it (both allocated at the
+        // first `push_imu`).
+        let imu =
+            memory::imu_bytes() + IMU_INBOX_CAPACITY * size_of::<ecvo_core::imu::GyroSample>();
         let geometry = options.geometry.map_or(0, |g| {
             let point = size_of::<CloudPoint>();
             let stride = g.point_stride.max(1);
@@ -362,6 +367,7 @@ impl Pipeline {
             frames
                 .saturating_add(raw)
                 .saturating_add(scratch)
+                .saturating_add(imu)
                 .saturating_add(geometry)
                 .saturating_add(outputs)
                 .saturating_add(poses),

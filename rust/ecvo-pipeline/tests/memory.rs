@@ -1,7 +1,8 @@
 //! `Pipeline::memory_needed` is an upper bound of what a pipeline really allocates: a
 //! counting global allocator records the peak of the bytes outstanding from
 //! `Pipeline::new` to `finish`, at 320x180 and 640x480, with and without the geometry
-//! stage, offline and live, and the figure must cover it. A pipeline over its budget
+//! stage, offline and live, with a 400 Hz gyro stream, and the figure must cover it;
+//! the IMU inbox allocates once, what the need counts for it. A pipeline over its budget
 //! is refused before it allocates, with the need and the budget; and once it is
 //! finished or dropped the bytes outstanding are back at the baseline.
 
@@ -11,8 +12,11 @@ mod common;
 use std::sync::Mutex;
 use std::sync::atomic::Ordering;
 
+use ecvo_core::imu::GyroSample;
 use ecvo_core::memory::{self, MB};
-use ecvo_pipeline::{Admission, Error, GeometryOptions, Pipeline, PipelineOptions};
+use ecvo_pipeline::{
+    Admission, Error, GeometryOptions, IMU_INBOX_CAPACITY, Pipeline, PipelineOptions,
+};
 
 #[path = "../../ecvo-core/tests/support/counting_alloc.rs"]
 mod counting_alloc;
@@ -25,9 +29,26 @@ static GLOBAL: Counting = Counting;
 /// One process-wide counter: one test at a time.
 static SERIAL: Mutex<()> = Mutex::new(());
 
+/// Gyro samples at 400 Hz over `[t0, t1)`.
+fn gyro(t0: f64, t1: f64) -> Vec<GyroSample> {
+    let (first, last) = ((t0 * 400.0).ceil() as i64, (t1 * 400.0).ceil() as i64);
+    (first..last)
+        .map(|i| GyroSample {
+            t: i as f64 / 400.0,
+            w: [0.0, 0.01, 0.0],
+        })
+        .collect()
+}
+
 fn run(config: &ecvo_core::Config, options: PipelineOptions, frames: &[common::Frame]) {
     let pipeline = Pipeline::new(config.clone(), options).expect("within the budget");
+    let mut last = frames.first().map_or(0.0, |f| f.timestamp - 0.1);
     for f in frames {
+        // A 400 Hz gyro up to the frame: the inbox and the tracker's ring fill.
+        pipeline
+            .push_imu(&gyro(last, f.timestamp + 0.001))
+            .expect("finite samples");
+        last = f.timestamp + 0.001;
         pipeline
             .push(f.timestamp, |i, d| {
                 i.copy_from_slice(&f.intensity);
@@ -87,6 +108,34 @@ fn memory_needed_bounds_the_peak_and_everything_is_given_back() {
             );
         }
     }
+}
+
+#[test]
+fn the_imu_inbox_is_counted_and_allocated_once() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let (config, _) = common::synthetic(1, 3);
+    let inbox = IMU_INBOX_CAPACITY * size_of::<GyroSample>();
+    let pipeline = Pipeline::new(config, PipelineOptions::default()).expect("valid");
+    let samples = gyro(0.0, 60.0);
+    let base = CURRENT.load(Ordering::Relaxed);
+    pipeline.push_imu(&samples[..10]).unwrap();
+    let first = CURRENT.load(Ordering::Relaxed) - base;
+    // 24,000 samples wrap the inbox: nothing more (no frame, so the tracker reads none).
+    pipeline.push_imu(&samples[10..]).unwrap();
+    let all = CURRENT.load(Ordering::Relaxed) - base;
+    println!(
+        "IMU inbox: {first} bytes at the first push, {all} after {}; counted {inbox}",
+        samples.len()
+    );
+    assert!(
+        first > 0 && all == first,
+        "allocated once: {first} then {all}"
+    );
+    assert!(
+        first <= inbox && 2 * first > inbox,
+        "{first} against {inbox}"
+    );
+    drop(pipeline);
 }
 
 #[test]

@@ -35,6 +35,8 @@ pub const ENGINE_KEYS: &[&str] = &[
     "keyframe_spread",
     "lookup_depth",
     "keyframe_fuse_every",
+    "imu_fusion",
+    "imu_prior_term",
     "memory_budget",
 ];
 
@@ -221,6 +223,8 @@ impl EngineSettings {
                 ],
             )?,
             keyframe_fuse_every: kw.take("keyframe_fuse_every", "an int >= 0")?,
+            imu_fusion: kw.take("imu_fusion", "a bool")?,
+            imu_prior_term: kw.take("imu_prior_term", "a bool")?,
             memory_budget: kw.take("memory_budget", "an int (bytes)")?,
         }))
     }

@@ -79,3 +79,37 @@ def test_bad_imu_samples_are_refused(synth):
         ecvo.Tracker(seq.camera, imu_rotation=np.diag([1.0, 1.0, -1.0]))
     with pytest.raises(ValueError, match="time_offset"):
         ecvo.Tracker(seq.camera, imu_time_offset=5.0)
+
+
+def test_imu_fusion_is_the_cli_flag_with_the_same_default(pan, cli, tmp_path):
+    # Off by default, as in ecvo run; imu_fusion=True is --imu-fusion, bit for bit.
+    base = ecvo.run_sequence(pan, frame_step=3)
+    off = ecvo.run_sequence(pan, frame_step=3, imu_fusion=False)
+    on = ecvo.run_sequence(pan, frame_step=3, imu_fusion=True)
+    assert np.array_equal(base["trajectory"], off["trajectory"])
+    assert not np.array_equal(on["trajectory"], off["trajectory"]), "the setting is applied"
+    run = tmp_path / "run"
+    cli("run", pan, "--out", run, "--frame-step", "3", "--imu-fusion")
+    assert np.array_equal(on["trajectory"], np.array(read_tum(run / "trajectory.txt")))
+    seq = ecvo.read_sequence(pan, max_frames=1)
+    with pytest.raises(TypeError, match="imu_fusion must be a bool"):
+        ecvo.Tracker(seq.camera, imu_fusion="yes")
+
+
+def test_imu_prior_term_is_the_cli_flag_with_the_same_default(pan, cli, tmp_path):
+    # The engine's default whichever it is: no keyword is the CLI without the flag.
+    base = ecvo.run_sequence(pan, frame_step=3)
+    run = tmp_path / "default"
+    cli("run", pan, "--out", run, "--frame-step", "3")
+    assert np.array_equal(base["trajectory"], np.array(read_tum(run / "trajectory.txt")))
+    for on in (True, False):
+        got = ecvo.run_sequence(pan, frame_step=3, imu_prior_term=on)
+        run = tmp_path / f"prior-{on}"
+        cli("run", pan, "--out", run, "--frame-step", "3", "--imu-prior-term", str(on).lower())
+        assert np.array_equal(got["trajectory"], np.array(read_tum(run / "trajectory.txt")))
+    on = ecvo.run_sequence(pan, frame_step=3, imu_prior_term=True)["trajectory"]
+    off = ecvo.run_sequence(pan, frame_step=3, imu_prior_term=False)["trajectory"]
+    assert not np.array_equal(on, off), "the setting is applied"
+    seq = ecvo.read_sequence(pan, max_frames=1)
+    with pytest.raises(TypeError, match="imu_prior_term must be a bool"):
+        ecvo.Tracker(seq.camera, imu_prior_term=1.5)

@@ -69,6 +69,12 @@ pub struct Settings {
     pub lookup_depth: Option<ecvo_core::LookupDepth>,
     /// Fuse every Nth frame after the keyframe with the chain (0: off).
     pub keyframe_fuse_every: Option<u32>,
+    /// With a gyroscope, fuse its rotation into each believed registration
+    /// ([`Config::imu_fusion`]; `None`: the engine's default, off).
+    pub imu_fusion: Option<bool>,
+    /// With a gyroscope, its rotation is also a prior term in `MOTION`'s normal
+    /// equations ([`Config::imu_prior_term`]; `None`: the engine's default).
+    pub imu_prior_term: Option<bool>,
     /// The memory budget in bytes (`None`: the engine's default).
     pub memory_budget: Option<usize>,
 }
@@ -182,6 +188,8 @@ impl Settings {
             keyframe_max_spread_growth: None,
             lookup_depth: None,
             keyframe_fuse_every: None,
+            imu_fusion: None,
+            imu_prior_term: None,
             memory_budget: None,
         }
     }
@@ -256,6 +264,12 @@ impl Settings {
         }
         if let Some(f) = self.keyframe_max_spread_growth {
             config.keyframe_max_spread_growth = f;
+        }
+        if let Some(f) = self.imu_fusion {
+            config.imu_fusion = f;
+        }
+        if let Some(f) = self.imu_prior_term {
+            config.imu_prior_term = f;
         }
         if let Some(text) = &self.levels {
             config.reference_levels = parse_levels(text).map_err(|e| parse("levels", text, e))?;
@@ -358,5 +372,30 @@ mod tests {
         .config(camera())
         .unwrap();
         assert_eq!(c.memory_budget, 1);
+    }
+
+    #[test]
+    fn imu_settings_default_to_the_engines_and_apply() {
+        let engine = Config::new(camera(), Preset::Pc, Mode::L2);
+        assert!(!engine.imu_fusion, "the engine's default is off");
+        let c = Settings::default().config(camera()).unwrap();
+        assert_eq!(c.imu_fusion, engine.imu_fusion);
+        assert_eq!(c.imu_prior_term, engine.imu_prior_term);
+        for on in [true, false] {
+            let c = Settings {
+                imu_fusion: Some(on),
+                ..Settings::default()
+            }
+            .config(camera())
+            .unwrap();
+            assert_eq!(c.imu_fusion, on);
+            let c = Settings {
+                imu_prior_term: Some(on),
+                ..Settings::default()
+            }
+            .config(camera())
+            .unwrap();
+            assert_eq!(c.imu_prior_term, on);
+        }
     }
 }

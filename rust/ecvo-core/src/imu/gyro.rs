@@ -176,6 +176,29 @@ impl Gyro {
 pub const MIN_GYRO_SIGMA_RAD: f64 = 5e-4;
 
 impl Gyro {
+    /// The variance of the gyro's rotation over an interval of `dt` seconds, per
+    /// axis, rad²: its white noise integrated over the interval and the bias
+    /// estimate's spread times the interval, floored at [`MIN_GYRO_SIGMA_RAD`].
+    pub fn rotation_variance(&self, dt: f64) -> f64 {
+        let nd = self.calibration.noise_density();
+        let bias_var = self.bias.covariance.trace() / 3.0;
+        (nd * nd * dt + bias_var * dt * dt).max(MIN_GYRO_SIGMA_RAD.powi(2))
+    }
+
+    /// With [`crate::Config::imu_prior_term`]: the information (1/rad²) of the prior
+    /// term the gyro's rotation over frame `index`'s interval adds to `MOTION`'s
+    /// normal equations ([`crate::MotionConfig::rotation_prior_information`]), or
+    /// 0 without a gyro prior for the frame. The inverse of
+    /// [`Gyro::rotation_variance`], times the inflation the registration's own
+    /// covariance gets everywhere else (its pixels' errors are not independent: the
+    /// images' `JᵀWJ` overstates their information about as much), so that the two
+    /// are weighed as [`Gyro::fuse`] weighs them.
+    pub fn prior_information(&self, index: u64) -> f64 {
+        self.pending.filter(|p| p.index == index).map_or(0.0, |p| {
+            VISUAL_COVARIANCE_INFLATION / self.rotation_variance(p.dt)
+        })
+    }
+
     /// With [`crate::Config::imu_fusion`]: frame `index`'s registration `T_{c,p}`
     /// (`moved`, with its information matrix) fused with the gyro's rotation over the
     /// interval, each weighed by its covariance (the registration's inflated as for
@@ -187,9 +210,7 @@ impl Gyro {
     pub fn fuse(&self, index: u64, moved: &Pose, information: &Matrix6<f64>) -> Option<Pose> {
         let p = self.pending.filter(|p| p.index == index)?;
         let cov = information.try_inverse()? * VISUAL_COVARIANCE_INFLATION;
-        let nd = self.calibration.noise_density();
-        let bias_var = self.bias.covariance.trace() / 3.0;
-        let var = (nd * nd * p.dt + bias_var * p.dt * p.dt).max(MIN_GYRO_SIGMA_RAD.powi(2));
+        let var = self.rotation_variance(p.dt);
         // The estimator's T = moved⁻¹, perturbed on the left; the gyro says its
         // rotation is p.rotation⁻¹.
         let t = moved.inverse();

@@ -3,7 +3,7 @@
 //! it drives are behind [`Loops`], so that the reference implementation kept for the
 //! tests runs the very same schedule.
 
-use nalgebra::{Matrix6, SymmetricEigen};
+use nalgebra::{Matrix6, SymmetricEigen, UnitQuaternion, Vector3};
 
 use super::warp::NoiseGain;
 use super::{Failure, MAX_STARTS, MAX_STEPS, MotionResult, NormalEquations, Status};
@@ -69,6 +69,44 @@ pub(super) struct Params {
     /// would pull the warp toward its dark pixels, so every photometric residual and
     /// gradient is zero and `MOTION` runs on depth.
     pub(super) photometric: bool,
+    /// A prior on the rotation ([`MotionConfig::rotation_prior_information`]).
+    pub(super) rotation_prior: Option<RotationPrior>,
+}
+
+/// A prior term on the rotation of `T_{j→i}`: `info · |Log(R R_target⁻¹)|²`.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct RotationPrior {
+    /// `R_target⁻¹`: the rotation of the start it came from (`T_{i→j}`'s).
+    target_inv: UnitQuaternion<f64>,
+    /// Its information, 1/rad².
+    info: f64,
+}
+
+impl RotationPrior {
+    /// The prior of `cfg` for a call with starts `inits`: the last start's rotation,
+    /// when there are several starts and `cfg` gives it an information.
+    fn of(cfg: &MotionConfig, inits: &[Pose]) -> Option<RotationPrior> {
+        let info = cfg.rotation_prior_information;
+        (info > 0.0 && info.is_finite() && inits.len() > 1).then(|| RotationPrior {
+            target_inv: inits[inits.len() - 1].rotation,
+            info,
+        })
+    }
+
+    /// `Log(R R_target⁻¹)` for `t` (`T_{j→i}`).
+    fn residual(&self, t: &Pose) -> Vector3<f64> {
+        (t.rotation * self.target_inv).scaled_axis()
+    }
+
+    /// The term's cost at `t`.
+    fn cost(&self, t: &Pose) -> f64 {
+        self.info * self.residual(t).norm_squared()
+    }
+
+    /// `ne` with the term linearised at `t` added.
+    fn add_to(&self, ne: &NormalEquations, t: &Pose) -> NormalEquations {
+        ne.with_rotation_prior(&self.residual(t), self.info)
+    }
 }
 
 impl Params {
@@ -81,6 +119,7 @@ impl Params {
             scale_tolerance: cfg.scale_tolerance,
             zz_floor: 0.0,
             photometric: true,
+            rotation_prior: None,
         }
     }
 
@@ -146,6 +185,7 @@ pub(super) fn motion_from<K: Loops>(
     // throughout) keep the photometric term, weak as it is.
     let p = Params {
         photometric: textured(fj, cfg) || !textured(fi, cfg),
+        rotation_prior: RotationPrior::of(cfg, inits),
         ..Params::of(cfg)
     };
     let mut last_step: Option<StepOutcome> = None;
@@ -334,7 +374,8 @@ fn best_start<K: Loops>(
 /// fixed-point passes; the scale fit at the start of the step runs to convergence).
 /// An update is accepted only if it lowers the mean robust cost at the scale it was
 /// computed with (the IRLS majoriser, so the robust objective itself does not rise)
-/// and leaves enough residuals; otherwise it is undone and the step ends. From the
+/// and leaves enough residuals; otherwise it is undone and the step ends (with a
+/// rotation prior, the cost and the system are the images' plus the prior's). From the
 /// second iteration on, an update whose predicted decrease is below
 /// [`MotionConfig::min_predicted_decrease`] is not tried: the step ends there.
 fn run_step<K: Loops>(
@@ -378,15 +419,24 @@ fn run_step<K: Loops>(
         let ne = lp.normal_equations(level, &wh);
         cost = ne.error / n as f64;
         stale = false;
+        // The registration's information stays the images' alone.
         out.ne = Some(ne);
         out.iterations = it + 1;
-        let Some(delta) = ne.solve() else {
+        // What the update minimises: with a rotation prior, its term too.
+        let (sys, total) = match &p.rotation_prior {
+            None => (ne, cost),
+            Some(prior) => {
+                let sys = prior.add_to(&ne, &t);
+                (sys, sys.error / n as f64)
+            }
+        };
+        let Some(delta) = sys.solve() else {
             out.hit_max = false;
             break;
         };
         // The model's decrease of `Σ w d²` for δ: `−gᵀδ` (= `gᵀH⁻¹g`).
-        let predicted = -delta.iter().zip(&ne.g).map(|(d, g)| d * g).sum::<f64>();
-        if it > 0 && predicted < cfg.min_predicted_decrease * ne.error {
+        let predicted = -delta.iter().zip(&sys.g).map(|(d, g)| d * g).sum::<f64>();
+        if it > 0 && predicted < cfg.min_predicted_decrease * sys.error {
             out.hit_max = false;
             break;
         }
@@ -398,9 +448,12 @@ fn run_step<K: Loops>(
         }
         // The candidate's cost and the first pass of the scale fit at `wh`, together.
         let (first, c) = lp.pass(&wh, p.weighting);
-        let c = c / m as f64;
-        // `!(c <= cost)` also rejects NaN.
-        if !(c <= cost) {
+        let c = match &p.rotation_prior {
+            None => c / m as f64,
+            Some(prior) => (c + prior.cost(&candidate)) / m as f64,
+        };
+        // `!(c <= total)` also rejects NaN.
+        if !(c <= total) {
             out.hit_max = false;
             break;
         }

@@ -49,6 +49,21 @@ impl NormalEquations {
         m
     }
 
+    /// The system with a prior term `info · |r|²` on the rotation added, `r` the
+    /// rotation residual at the linearisation point (`δ = [v; ω]`, the rotation
+    /// perturbed on the left, so `∂r/∂ω ≈ I`): `info` on the diagonal of the
+    /// rotation block, `info · r` to `JᵀWr`, `info · |r|²` to the error.
+    pub fn with_rotation_prior(&self, r: &nalgebra::Vector3<f64>, info: f64) -> NormalEquations {
+        let mut ne = *self;
+        // The diagonal (3,3), (4,4), (5,5) of the row-major upper triangle.
+        for (k, d) in [15, 18, 20].into_iter().enumerate() {
+            ne.h[d] += info;
+            ne.g[3 + k] += info * r[k];
+        }
+        ne.error += info * r.norm_squared();
+        ne
+    }
+
     /// The Gauss-Newton step `δ = −(JᵀWJ)⁻¹ JᵀWr`, or `None` when the system is
     /// not positive definite.
     pub fn solve(&self) -> Option<Vector6<f64>> {
@@ -229,4 +244,49 @@ fn twist_row<L: Lanes>(l: L, a: [L::V; 3], p: [L::V; 3]) -> [L::V; 6] {
         l.sub(l.mul(p[2], a[0]), l.mul(p[0], a[2])),
         l.sub(l.mul(p[0], a[1]), l.mul(p[1], a[0])),
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    /// The prior lands on the rotation block's diagonal and the rotation rows of
+    /// `JᵀWr`, nowhere else, and its step pulls the rotation onto the prior.
+    #[test]
+    fn the_rotation_prior_adds_to_the_rotation_block_only() {
+        let mut ne = NormalEquations::default();
+        let mut k = 0;
+        for r in 0..6 {
+            for c in r..6 {
+                ne.h[k] = if r == c { 2.0 } else { 0.1 * (r + c) as f64 };
+                k += 1;
+            }
+        }
+        ne.g = [1.0, -1.0, 0.5, 0.2, -0.3, 0.4];
+        ne.error = 3.0;
+        let r = Vector3::new(0.01, -0.02, 0.03);
+        let with = ne.with_rotation_prior(&r, 100.0);
+        let dh = with.hessian() - ne.hessian();
+        for i in 0..6 {
+            for j in 0..6 {
+                let want = if i == j && i >= 3 { 100.0 } else { 0.0 };
+                assert_eq!(dh[(i, j)], want, "({i}, {j})");
+            }
+        }
+        for i in 0..6 {
+            let want = if i >= 3 { 100.0 * r[i - 3] } else { 0.0 };
+            assert!((with.g[i] - ne.g[i] - want).abs() < 1e-12, "g[{i}]");
+        }
+        assert!((with.error - 3.0 - 100.0 * r.norm_squared()).abs() < 1e-12);
+        // With images that say nothing about the rotation, the step undoes r.
+        let mut blind = NormalEquations::default();
+        for d in [0, 6, 11] {
+            blind.h[d] = 1.0;
+        }
+        let step = blind.with_rotation_prior(&r, 1e4).solve().unwrap();
+        for i in 0..3 {
+            assert!((step[3 + i] + r[i]).abs() < 1e-12, "{step}");
+        }
+    }
 }

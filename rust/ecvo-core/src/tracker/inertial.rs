@@ -61,6 +61,7 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         timestamp: f64,
     ) -> Option<Pose> {
         self.motion.scale_from_last_start = false;
+        self.motion.rotation_prior_information = 0.0;
         if guess.is_some() {
             return guess;
         }
@@ -72,6 +73,11 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         // The gyro's prior is trusted at the coarsest step: it is compared with the
         // identity at its own scale.
         self.motion.scale_from_last_start = gyro.is_some();
+        // With `imu_prior_term`, its rotation is also a prior term in the normal
+        // equations of the calls that start from it (their last start).
+        if self.config.imu_prior_term {
+            self.motion.rotation_prior_information = self.gyro.prior_information(index);
+        }
         gyro.or(cv)
     }
 }

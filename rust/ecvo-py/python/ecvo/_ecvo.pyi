@@ -256,8 +256,11 @@ class Tracker:
     gyroscope (push_imu): imu_rotation (3x3 rotation taking IMU-frame vectors into
     the camera frame, x right, y down, z forward; default the identity),
     imu_time_offset (seconds added to an IMU timestamp to put it on the frames'
-    clock; default 0), gyro_noise_density (rad/s/√Hz) and gyro_bias_random_walk
-    (rad/s/√s). An unknown keyword is a TypeError, a bad value a ValueError.
+    clock; default 0), gyro_noise_density (rad/s/√Hz), gyro_bias_random_walk
+    (rad/s/√s), imu_fusion (bool, default False: also fuse the gyro's rotation
+    into each believed registration) and imu_prior_term (bool, default True: the
+    gyro's rotation is also a prior term in the registration's normal equations). An
+    unknown keyword is a TypeError, a bad value a ValueError.
 
     One tracker serves one thread at a time (another thread calling it meanwhile
     gets a RuntimeError saying so); several trackers run in parallel on several

@@ -61,6 +61,7 @@ fn params(weighting: Weighting, noise: DepthNoiseModel) -> Params {
         scale_tolerance: 1e-3,
         zz_floor: 0.0,
         photometric: true,
+        rotation_prior: None,
     }
 }
 
