@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The README's test command: `cargo test --workspace --exclude ecvo-py --release --no-fail-fast` (extra arguments
-# are passed on), then one last line counting the tests on real datasets that did not run because
-# their data is absent, with the command that makes them run. The exit status is cargo's.
+# The README's test command: `cargo test --workspace --exclude ecvo-py --exclude ecvo-bench
+# --release --no-fail-fast` (extra arguments are passed on), then one last line counting the
+# tests on real datasets that did not run because their data is absent, with the command that
+# makes them run. The exit status is cargo's.
 #
 #   scripts/test.sh [cargo test arguments...]
 #
@@ -13,8 +14,9 @@ log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 # ecvo-py has no Rust tests (test = false: its tests are pytest, scripts/python/test-python.sh);
 # left out, its numpy and pyo3 are not built and do not change the features of the crates
-# the run command built.
-cargo test --workspace --exclude ecvo-py --release --no-fail-fast "$@" 2>&1 | tee "$log"
+# the run command built. ecvo-bench holds only criterion benches (`cargo bench -p ecvo-bench`);
+# left out, criterion and its dependencies are not built.
+cargo test --workspace --exclude ecvo-py --exclude ecvo-bench --release --no-fail-fast "$@" 2>&1 | tee "$log"
 rc=${PIPESTATUS[0]}
 
 # Each test without its data writes `NOT RUN (no data): <test>: dataset `<name>` not found ...`

@@ -26,7 +26,7 @@ build() { # $1: target dir, $2: extra RUSTFLAGS
     PATH="/usr/bin:$PATH" RUSTC=/usr/bin/rustc RUSTDOC=/usr/bin/rustdoc \
     RUSTFLAGS="$2" CARGO_TARGET_DIR="$1" \
     CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc \
-    /usr/bin/cargo bench --target aarch64-unknown-linux-gnu -p ecvo-core --bench stages \
+    /usr/bin/cargo bench --target aarch64-unknown-linux-gnu -p ecvo-bench --bench stages \
     --no-run --message-format json 2>/dev/null \
     | python3 -c 'import json,sys
 for l in sys.stdin:

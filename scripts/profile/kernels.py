@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Where each microsecond of a frame goes, kernel by kernel (issue 30).
 
-For every bench of `cargo bench -p ecvo-core --bench stages` (`prepare/SIZE`: the
+For every bench of `cargo bench -p ecvo-bench --bench stages` (`prepare/SIZE`: the
 filter stage; `motion/SIZE`: one [A] from the identity, the tracker's settings), on
 one thread:
 
@@ -35,7 +35,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 def bench_binary():
     """Builds the stages bench and returns its executable."""
     out = subprocess.run(
-        ["cargo", "bench", "-p", "ecvo-core", "--bench", "stages", "--no-run",
+        ["cargo", "bench", "-p", "ecvo-bench", "--bench", "stages", "--no-run",
          "--message-format", "json"], cwd=ROOT, check=True, capture_output=True, text=True)
     exe = None
     for line in out.stdout.splitlines():

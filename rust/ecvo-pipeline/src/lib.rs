@@ -102,7 +102,7 @@ pub use stats::{PipelineStats, PoolStats, QueueStats, StageStats};
 pub use types::*;
 
 /// The 64-bit content hash [`Pipeline::push`] uses to tell a repeated frame, public
-/// for its benchmark (`benches/push.rs`).
+/// for its benchmark (`rust/ecvo-bench/benches/push.rs`).
 #[doc(hidden)]
 pub use shared::frame_hash;
 

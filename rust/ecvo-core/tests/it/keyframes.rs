@@ -5,7 +5,7 @@ use crate::common;
 
 use common::*;
 use ecvo_core::{Config, Error, Mode, Odometry};
-use ecvo_synth::{DepthNoise, SynthSequence};
+use ecvo_synth::{DepthNoise, SynthFrame, SynthSequence};
 
 fn keyframe_config(seq: &SynthSequence) -> Config {
     let mut c = config(seq, Mode::L2);
@@ -16,15 +16,15 @@ fn keyframe_config(seq: &SynthSequence) -> Config {
 #[test]
 fn keyframe_tracking_follows_the_ground_truth_with_fewer_motion_calls() {
     let seq = sequence(DepthNoise::phone_like(), 21);
-    let frames = 90;
+    let rendered = common::frames(&seq, 90);
     let mut chain = config(&seq, Mode::L2);
     chain.keyframes = false;
-    let (chain_odo, chain_outs) = run(&seq, chain, frames);
+    let (chain_odo, chain_outs) = run_frames(chain, &rendered);
     let mut kf = keyframe_config(&seq);
     // Without the periodic fusion every frame that does not become a keyframe costs
     // exactly one MOTION call.
     kf.refine_every = 0;
-    let (odo, outs) = run(&seq, kf, frames);
+    let (odo, outs) = run_frames(kf, &rendered);
     let c = odo.tracker().counters();
     assert_eq!(c.lost_frames, 0, "{c:?}");
     assert_eq!(c.refinements, 0);
@@ -107,18 +107,18 @@ fn keyframe_settings_are_checked() {
     assert!(!Config::paper(camera_of(&seq.camera), ecvo_core::Preset::Pc, Mode::L2).keyframes);
 }
 
-/// Tracks `frames` frames of `seq` with frames `black` made black (intensity 0, depth
-/// kept): the lights going off, then on.
+/// Tracks `frames` (from [`common::frames`]) with frames `black` made black
+/// (intensity 0, depth kept): the lights going off, then on.
 fn run_with_black(
-    seq: &SynthSequence,
+    frames: &[SynthFrame],
     config: Config,
-    frames: usize,
     black: std::ops::Range<usize>,
 ) -> (Odometry, Vec<ecvo_core::FrameOutput>) {
     let mut odo = Odometry::new(config).unwrap();
-    let outs = (0..frames)
-        .map(|i| {
-            let f = seq.frame(i);
+    let outs = frames
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
             let dark = vec![0u8; f.intensity.len()];
             let intensity = if black.contains(&i) {
                 &dark
@@ -146,10 +146,11 @@ fn the_first_frame_after_a_black_run_registers_on_depth_in_both_modes() {
     // testdata/synth_phone_320x180's stream (millimetre depth, seed 1).
     let mut seq = SynthSequence::phone_320x180(45, 1);
     seq.noise = DepthNoise::phone_like();
+    let rendered = common::frames(&seq, 45);
     for keyframes in [false, true] {
         let mut c = config(&seq, Mode::L2);
         c.keyframes = keyframes;
-        let (odo, outs) = run_with_black(&seq, c.clone(), 45, 20..25);
+        let (odo, outs) = run_with_black(&rendered, c.clone(), 20..25);
         let counters = odo.tracker().counters();
         let lost: Vec<u64> = outs
             .iter()
@@ -158,7 +159,7 @@ fn the_first_frame_after_a_black_run_registers_on_depth_in_both_modes() {
             .collect();
         assert!(lost.is_empty(), "keyframes {keyframes}: lost {lost:?}");
         assert_eq!(counters.lost_frames, 0, "keyframes {keyframes}");
-        let (_, clean) = run_with_black(&seq, c, 45, 0..0);
+        let (_, clean) = run_frames(c, &rendered);
         let (rmse, clean) = (drift_rmse(&seq, &outs), drift_rmse(&seq, &clean));
         println!(
             "keyframes {keyframes}: drift RMSE {:.2} mm (without black frames {:.2} mm)",

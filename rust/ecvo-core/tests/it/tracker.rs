@@ -43,8 +43,9 @@ fn comp_follows_section_3_2() {
 fn counters_obey_the_identity_and_l2_tracks() {
     let seq = sequence(DepthNoise::phone_like(), 21);
     let frames = 90;
+    let rendered = common::frames(&seq, frames);
     for mode in [Mode::Naive, Mode::L1, Mode::L2] {
-        let (odo, outs) = run(&seq, config(&seq, mode), frames);
+        let (odo, outs) = run_frames(config(&seq, mode), &rendered);
         let c = odo.tracker().counters();
         assert_eq!(c.frames, frames as u64);
         assert_eq!(c.lost_frames, 0, "{mode:?}");
@@ -274,8 +275,8 @@ fn refused_corrections_do_not_promote_and_are_counted() {
     cfg.max_correction_distance = 1e-12;
     let mut odo = Odometry::new(cfg.clone()).unwrap();
     let mut last_ref = 0;
-    for i in 0..90 {
-        let f = seq.frame(i);
+    let rendered = common::frames(&seq, 90);
+    for (i, f) in rendered.iter().enumerate() {
         let o = odo
             .push(FrameView {
                 timestamp: f.timestamp,
@@ -305,7 +306,7 @@ fn refused_corrections_do_not_promote_and_are_counted() {
     // With the default gate the same stream's corrections are accepted.
     let mut chain = config(&seq, Mode::L1);
     chain.keyframes = false;
-    let (odo, _) = run(&seq, chain, 90);
+    let (odo, _) = run_frames(chain, &rendered);
     let c = odo.tracker().counters();
     assert!(
         c.references[0] > 0 && c.rejected_corrections * 10 <= c.references[0],

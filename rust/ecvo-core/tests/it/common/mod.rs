@@ -4,7 +4,7 @@
 use ecvo_core::{
     Camera, Config, FrameOutput, FrameView, Mode, Odometry, Pose, PreparedFrame, Preparer, Preset,
 };
-use ecvo_synth::{DepthNoise, SynthCamera, SynthSequence};
+use ecvo_synth::{DepthNoise, SynthCamera, SynthFrame, SynthSequence};
 
 /// A 320x180 phone-like sequence with a fine depth unit (0.2 mm) and the given noise.
 pub fn sequence(noise: DepthNoise, seed: u64) -> SynthSequence {
@@ -67,6 +67,30 @@ pub fn pose_error(a: &Pose, b: &Pose) -> (f64, f64) {
         d.translation.vector.norm(),
         ecvo_core::se3::angle(&d).to_degrees(),
     )
+}
+
+/// The first `n` frames of `seq`, rendered once for a test that tracks them several
+/// times (rendering costs more than tracking: most of these tests' time).
+pub fn frames(seq: &SynthSequence, n: usize) -> Vec<SynthFrame> {
+    (0..n).map(|i| seq.frame(i)).collect()
+}
+
+/// Tracks `frames` (from [`frames`]) with `config`, one `Odometry::push` each: what
+/// [`run`] does, without rendering them again.
+pub fn run_frames(config: Config, frames: &[SynthFrame]) -> (Odometry, Vec<FrameOutput>) {
+    let mut odo = Odometry::new(config).unwrap();
+    let outs = frames
+        .iter()
+        .map(|f| {
+            odo.push(FrameView {
+                timestamp: f.timestamp,
+                intensity: &f.intensity,
+                depth: &f.depth,
+            })
+            .unwrap()
+        })
+        .collect();
+    (odo, outs)
 }
 
 /// Tracks the first `frames` frames of `seq` with `config`, one `Odometry::push` each.

@@ -179,9 +179,30 @@ impl Rng {
     }
 }
 
+/// The sequence every stream is made from.
+fn sequence() -> SynthSequence {
+    SynthSequence::phone_320x180(FRAMES, 11)
+}
+
+/// The frames of [`sequence`] as it renders them (intensity, depth), rendered once per
+/// process: every fault's stream keeps most of them unchanged, and rendering costs
+/// more than tracking.
+fn clean_frames() -> &'static [(Vec<u8>, Vec<u16>)] {
+    static CLEAN: std::sync::OnceLock<Vec<(Vec<u8>, Vec<u16>)>> = std::sync::OnceLock::new();
+    CLEAN.get_or_init(|| {
+        let seq = sequence();
+        (0..FRAMES)
+            .map(|i| {
+                let f = seq.frame(i);
+                (f.intensity, f.depth)
+            })
+            .collect()
+    })
+}
+
 /// The stream with `fault` in frames `START..START + LEN`.
 pub fn stream(fault: Fault) -> Vec<Input> {
-    let seq = SynthSequence::phone_320x180(FRAMES, 11);
+    let seq = sequence();
     let jump = Pose::from_parts(
         Translation3::new(0.3, 0.0, 0.0),
         UnitQuaternion::from_scaled_axis(Vector3::y() * 20f64.to_radians()),
@@ -193,18 +214,21 @@ pub fn stream(fault: Fault) -> Vec<Input> {
         let mut timestamp = seq.timestamp(i);
         let mut truth = seq.pose(i);
         let mut camera = seq.camera;
-        if fault == Fault::Jump30cm20deg && i >= START {
+        let jumped = fault == Fault::Jump30cm20deg && i >= START;
+        if jumped {
             truth *= jump;
         }
         let zoom = matches!(
             fault,
             Fault::IntrinsicsZoom | Fault::IntrinsicsZoomAnnounced
         );
-        if zoom && faulty(i) {
+        let zoomed = zoom && faulty(i);
+        if zoomed {
             camera.fx *= 1.3;
             camera.fy *= 1.3;
         }
-        if fault == Fault::IntrinsicsResolution && faulty(i) {
+        let resized = fault == Fault::IntrinsicsResolution && faulty(i);
+        if resized {
             camera = SynthCamera {
                 width: 160,
                 height: 90,
@@ -218,6 +242,9 @@ pub fn stream(fault: Fault) -> Vec<Input> {
         let (mut intensity, mut depth) = if fault == Fault::FrozenFrame && faulty(i) {
             let last = &out[START - 1];
             (last.intensity.clone(), last.depth.clone())
+        } else if !(jumped || zoomed || resized) {
+            // What the render below gives with the sequence's own camera and pose.
+            clean_frames()[i].clone()
         } else {
             let r = render(&seq.scene, &camera, &truth);
             apply_noise(&r, &camera, &seq.noise, seq.frame_seed(i))

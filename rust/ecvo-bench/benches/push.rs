@@ -2,7 +2,7 @@
 //! of both planes, against copying the same frame into a pooled buffer (which
 //! `push` does anyway), measured in the same run.
 //!
-//! `cargo bench -p ecvo-pipeline --bench push`
+//! `cargo bench -p ecvo-bench --bench push`
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;

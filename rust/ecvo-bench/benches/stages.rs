@@ -8,8 +8,8 @@
 //! phone-like noise), so the benches run anywhere:
 //!
 //! ```text
-//! cargo bench -p ecvo-core --bench stages
-//! cargo bench -p ecvo-core --bench stages -- prepare/320x240
+//! cargo bench -p ecvo-bench --bench stages
+//! cargo bench -p ecvo-bench --bench stages -- prepare/320x240
 //! ```
 //!
 //! Everything runs inside a one-thread rayon pool: the figures are the cost of a
