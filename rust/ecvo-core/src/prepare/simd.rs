@@ -10,7 +10,7 @@
 //!
 //! Why this and not a SIMD crate: the kernels stay plain, portable Rust (the same
 //! source is the NEON build), there is no new dependency, and the bits cannot
-//! depend on the path. Measured with `cargo bench -p ecvo-core --bench stages`,
+//! depend on the path. Measured with `cargo bench -p ecvo-bench --bench stages`,
 //! `ECVO_NO_AVX2=1` against the default on the same machine, the AVX2 copies of the
 //! bilateral filter and the normals make the whole preparation about 1.5x faster;
 //! `ECVO_NO_AVX512=1` against the default on an AVX-512 CPU (AMD EPYC, Zen 4), the
