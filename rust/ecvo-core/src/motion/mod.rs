@@ -130,10 +130,16 @@ pub const CHUNK: usize = 4096;
 
 /// Fewest chunks one rayon task takes. Handing work to another thread costs tens of
 /// microseconds (waking it, and spinning while waiting for it), so a loop is only
-/// split when each part has at least this many chunks: at 640x480 the finest step of
-/// the paper's sampling (about 77k points) splits into up to nine tasks and the
-/// middle one (19k) into two; at 320x240 only the finest step (19k) splits, in two.
-pub const MIN_CHUNKS_PER_TASK: usize = 2;
+/// split when each of two parts has at least this many chunks. At 1, every step of
+/// 8k points or more splits: at 320x240 the finest step (up to 19k points) and the
+/// half-resolution one (up to 19k); at 2 (before issue 46's keyframe tracking) only
+/// loops of 16k points did, so at 320x240 keyframe tracking's registrations ran on
+/// one thread and the pipeline of 2 threads gave only 1.20x / 1.30x the frames per
+/// second of one (`examples/throughput.rs tum_fr1_xyz_half --threads 2 --repeat 3`,
+/// two alternated rounds, idle 2-core AVX-512 VM); at 1: 1.51x / 1.42x, and the
+/// sequential engine in a 2-thread pool 1.27x / 1.21x (was 1.11x / 1.10x). At
+/// 640x480 1.71x against 1.68x. The chunking itself is unchanged, so are the poses.
+pub const MIN_CHUNKS_PER_TASK: usize = 1;
 
 /// Runs `MOTION` and keeps its scratch buffers between calls, so that a warm
 /// estimator does not allocate.
