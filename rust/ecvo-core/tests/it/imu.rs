@@ -78,12 +78,7 @@ fn track(
                 next += 1;
             }
             odo.push_imu(&imu[start..next]).unwrap();
-            odo.push(ecvo_core::FrameView {
-                timestamp: f.timestamp,
-                intensity: &f.intensity,
-                depth: &f.depth,
-            })
-            .unwrap()
+            super::common::push(&mut odo, f)
         })
         .collect();
     (odo, outs)

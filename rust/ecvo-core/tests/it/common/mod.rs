@@ -75,38 +75,28 @@ pub fn frames(seq: &SynthSequence, n: usize) -> Vec<SynthFrame> {
     (0..n).map(|i| seq.frame(i)).collect()
 }
 
+/// Pushes `f` into `odo`, unwrapping the result.
+pub fn push(odo: &mut Odometry, f: &SynthFrame) -> FrameOutput {
+    odo.push(FrameView {
+        timestamp: f.timestamp,
+        intensity: &f.intensity,
+        depth: &f.depth,
+    })
+    .unwrap()
+}
+
 /// Tracks `frames` (from [`frames`]) with `config`, one `Odometry::push` each: what
 /// [`run`] does, without rendering them again.
 pub fn run_frames(config: Config, frames: &[SynthFrame]) -> (Odometry, Vec<FrameOutput>) {
     let mut odo = Odometry::new(config).unwrap();
-    let outs = frames
-        .iter()
-        .map(|f| {
-            odo.push(FrameView {
-                timestamp: f.timestamp,
-                intensity: &f.intensity,
-                depth: &f.depth,
-            })
-            .unwrap()
-        })
-        .collect();
+    let outs = frames.iter().map(|f| push(&mut odo, f)).collect();
     (odo, outs)
 }
 
 /// Tracks the first `frames` frames of `seq` with `config`, one `Odometry::push` each.
 pub fn run(seq: &SynthSequence, config: Config, frames: usize) -> (Odometry, Vec<FrameOutput>) {
     let mut odo = Odometry::new(config).unwrap();
-    let outs = (0..frames)
-        .map(|i| {
-            let f = seq.frame(i);
-            odo.push(FrameView {
-                timestamp: f.timestamp,
-                intensity: &f.intensity,
-                depth: &f.depth,
-            })
-            .unwrap()
-        })
-        .collect();
+    let outs = (0..frames).map(|i| push(&mut odo, &seq.frame(i))).collect();
     (odo, outs)
 }
 
