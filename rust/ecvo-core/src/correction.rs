@@ -77,6 +77,7 @@ mod tests {
             start: 0,
             status: Status::Converged,
             depth_spread: Default::default(),
+            images_pose: None,
         }
     }
 

@@ -137,6 +137,8 @@ struct StepOutcome {
     /// The normal equations of the last linearisation (None: the step never had
     /// enough residuals).
     ne: Option<NormalEquations>,
+    /// `T_{j→i}` where `ne` was linearised.
+    ne_at: Pose,
     /// Gauss-Newton iterations run (steps solved).
     iterations: u32,
     /// True when the step used all its iterations, each one accepted.
@@ -175,6 +177,7 @@ pub(super) fn motion_from<K: Loops>(
         start: 0,
         status: Status::Failed(Failure::TooFewPixels),
         depth_spread: DepthSpread::default(),
+        images_pose: None,
     };
     if inits.is_empty() || !inits.iter().all(se3::is_finite) {
         result.status = Status::Failed(Failure::NotFinite);
@@ -295,6 +298,13 @@ pub(super) fn motion_from<K: Loops>(
     };
     if result.is_ok() {
         result.pose = pose;
+        if p.rotation_prior.is_some() {
+            // The images' own Gauss-Newton step from their last linearisation.
+            result.images_pose = ne
+                .solve()
+                .map(|d| se3::compose(&se3::exp(&d), &last.ne_at).inverse())
+                .filter(se3::is_finite);
+        }
         if cfg.depth_spread {
             // The residuals of the finest step's last warp (at its final pose, or at an
             // update it then rejected: close to it).
@@ -396,6 +406,7 @@ fn run_step<K: Loops>(
     let mut out = StepOutcome {
         t,
         ne: None,
+        ne_at: t,
         iterations: 0,
         hit_max: false,
         scale: start,
@@ -421,6 +432,7 @@ fn run_step<K: Loops>(
         stale = false;
         // The registration's information stays the images' alone.
         out.ne = Some(ne);
+        out.ne_at = t;
         out.iterations = it + 1;
         // What the update minimises: with a rotation prior, its term too.
         let (sys, total) = match &p.rotation_prior {

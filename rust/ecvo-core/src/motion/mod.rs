@@ -114,6 +114,12 @@ pub struct MotionResult {
     /// (every 4th residual; empty unless [`MotionConfig::depth_spread`] and the call
     /// succeeded): what [`crate::noise::NoiseFit`] fits the depth-noise model to.
     pub depth_spread: DepthSpread,
+    /// With a rotation prior ([`MotionConfig::rotation_prior_information`]): the
+    /// pose the images alone give, one Gauss-Newton step of their finest normal
+    /// equations (`information`) without the prior from where they were last
+    /// linearised, in `pose`'s convention. What the gyro's bias is learnt from, so
+    /// that the gyro is not counted twice. `None` without a prior term.
+    pub images_pose: Option<Pose>,
 }
 
 impl MotionResult {

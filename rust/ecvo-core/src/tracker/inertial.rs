@@ -34,8 +34,13 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
         } else {
             None
         };
+        // The bias is learnt from the images' own motion: the registration's, pulled
+        // towards the gyro by the prior term, would count the gyro twice.
+        let seen = reg.images_pose.map_or(*moved, |p| {
+            crate::se3::compose(moved, &crate::se3::compose(&reg.pose.inverse(), &p))
+        });
         self.gyro
-            .learn(index, moved, &reg.information, &mut self.counters.imu);
+            .learn(index, &seen, &reg.information, &mut self.counters.imu);
         fused
     }
 

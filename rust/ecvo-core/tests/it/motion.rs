@@ -281,3 +281,38 @@ fn one_scale_pass_per_update_keeps_the_pose() {
     full.motion.scale_passes_per_update = ecvo_core::motion::MAX_SCALE_PASSES;
     agree_on_noisy_frames(&cfg, &full);
 }
+
+/// A rotation prior 0.1° off the truth (a gyro's error over a frame is hundredths of
+/// a degree) and far more certain than the images pulls `MOTION`'s pose onto it;
+/// `images_pose` comes back to where the images alone put it (the same call without
+/// the prior), which is what the gyro's bias is learnt from.
+#[test]
+fn images_pose_is_the_images_alone_under_a_rotation_prior() {
+    let seq = sequence(DepthNoise::kinect_like(), 7);
+    let cfg = config(&seq, Mode::Naive);
+    let (fa, pa) = prepared(&seq, 30, &cfg);
+    let (fb, pb) = prepared(&seq, 33, &cfg);
+    let truth = pa.inverse() * pb;
+    let off = nalgebra::UnitQuaternion::from_scaled_axis(nalgebra::Vector3::new(
+        0.0,
+        0.1f64.to_radians(),
+        0.0,
+    ));
+    let target = Pose::from_parts(truth.translation, off * truth.rotation);
+    let mut est = MotionEstimator::new();
+    let plain = est.motion_from(&fb, &fa, &[Pose::identity(), target], &cfg.motion);
+    assert!(plain.is_ok() && plain.images_pose.is_none());
+    let mut m = cfg.motion.clone();
+    m.rotation_prior_information = 1e12;
+    let r = est.motion_from(&fb, &fa, &[Pose::identity(), target], &m);
+    assert!(r.is_ok(), "{:?}", r.status);
+    let images = r.images_pose.expect("with a prior term");
+    let pulled = r.pose.rotation.angle_to(&target.rotation).to_degrees();
+    let own = images.rotation.angle_to(&plain.pose.rotation).to_degrees();
+    let (dt, _) = pose_error(&images, &plain.pose);
+    println!("pose {pulled:.4}° from the prior; images_pose {own:.4}°, {:.3} mm from the images' own", dt * 1e3);
+    assert!(pulled < 0.05, "the prior wins: {pulled}°");
+    // Measured 0.024° and 1.4 mm: within the estimator's own stopping tolerance
+    // (`min_update_px` 0.1 px is 0.02° here), against the prior's 0.1°.
+    assert!(own < 0.05 && dt < 2e-3, "images_pose {own}°, {} mm off", dt * 1e3);
+}
