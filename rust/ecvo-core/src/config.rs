@@ -434,6 +434,12 @@ pub struct Config {
     /// half at steps 1-4 with six simulated gyros gave ATE geometric means of 0.825
     /// and 0.971, the pan suite 0.927 (`docs/imu.md`). No effect without samples.
     pub imu_prior_term: bool,
+    /// With a gyroscope, a frame whose depth was captured at another time than its
+    /// intensity ([`crate::Odometry::push_with_depth_time`]) has its depth turned by
+    /// the gyro's rotation between the two times before it is prepared
+    /// ([`crate::imu::depth_time`]). On by default (`docs/imu.md`). No effect without
+    /// samples or without a depth time.
+    pub imu_depth_time: bool,
 }
 
 impl Config {
@@ -514,6 +520,7 @@ impl Config {
             imu: ImuCalibration::default(),
             imu_fusion: false,
             imu_prior_term: true,
+            imu_depth_time: true,
         }
     }
 

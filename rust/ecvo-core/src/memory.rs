@@ -141,7 +141,7 @@ pub fn prepared_frame_bytes(config: &Config) -> usize {
 /// The preparers' scratch (the filter's, and with lookup frames the tracker's
 /// finisher's): padded and smoothed depth (4 bytes a pixel each), the two
 /// per-pixel masks, the rays, the intensity and depth planes of every level (8 bytes
-/// a pixel) and, with a point budget, the selection's candidates (counted at twice
+/// a pixel), the raw depth turned to the intensity's time (2 bytes a pixel) and, with a point budget, the selection's candidates (counted at twice
 /// their number: they grow by `push`).
 pub fn preparer_bytes(config: &Config) -> usize {
     let (w, h) = (config.camera.width, config.camera.height);
@@ -167,7 +167,9 @@ pub fn preparer_bytes(config: &Config) -> usize {
         })
         .max()
         .unwrap_or(0);
-    let scratch = padded + smoothed + masks + rays + spatial + half + planes + selector;
+    // Raw depth turned to the intensity's time (`Preparer::prepare_turned_into`).
+    let turned = 2 * w * h;
+    let scratch = padded + smoothed + masks + rays + spatial + half + planes + selector + turned;
     scratch + finisher_bytes(config, scratch)
 }
 
@@ -193,9 +195,11 @@ fn finisher_bytes(config: &Config, scratch: usize) -> usize {
 }
 
 /// The tracker's ring of gyroscope samples ([`crate::imu::RING_CAPACITY`] of
-/// them), allocated once at the first `push_imu` whatever the configuration.
+/// them) and the depth clock's ([`crate::imu::depth_time::DEPTH_CLOCK_CAPACITY`]),
+/// allocated once at the first `push_imu` whatever the configuration.
 pub fn imu_bytes() -> usize {
-    crate::imu::RING_CAPACITY * size_of::<crate::imu::GyroSample>()
+    (crate::imu::RING_CAPACITY + crate::imu::depth_time::DEPTH_CLOCK_CAPACITY)
+        * size_of::<crate::imu::GyroSample>()
 }
 
 /// One motion estimator's scratch for the largest template of `config`'s schedule

@@ -7,7 +7,7 @@ use crate::Pose;
 use crate::camera::{Camera, FrameView};
 use crate::config::Config;
 use crate::error::Result;
-use crate::imu::GyroSample;
+use crate::imu::{DepthClock, DepthTime, GyroSample};
 use crate::prepare::{PreparedFrame, Preparer};
 use crate::tracker::{FrameOutput, Tracker};
 
@@ -17,6 +17,8 @@ pub struct Odometry {
     preparer: Preparer,
     tracker: Tracker<Arc<PreparedFrame>>,
     pool: Vec<Arc<PreparedFrame>>,
+    /// The gyro samples pushed, for frames with a depth time of their own.
+    clock: DepthClock,
 }
 
 impl Odometry {
@@ -29,6 +31,7 @@ impl Odometry {
         let tracker = Tracker::new(config)?;
         Ok(Odometry {
             preparer: Preparer::new(tracker.config()),
+            clock: DepthClock::new(tracker.config().imu),
             tracker,
             pool: Vec::new(),
         })
@@ -37,6 +40,29 @@ impl Odometry {
     /// Prepares and tracks one frame; fails only on a frame that does not match the
     /// camera (wrong buffer sizes, non-finite timestamp).
     pub fn push(&mut self, view: FrameView<'_>) -> Result<FrameOutput> {
+        self.push_prepared(view, DepthTime::Same)
+    }
+
+    /// [`Odometry::push`] for a frame whose depth image was captured at
+    /// `depth_timestamp` (seconds, the frames' clock), not at its intensity's
+    /// `view.timestamp`: with gyro samples covering the two times (and
+    /// [`crate::Config::imu_depth_time`]), the depth is turned to the intensity's
+    /// time before it is prepared ([`crate::imu::depth_time`]); counted in
+    /// `Counters::imu` either way.
+    pub fn push_with_depth_time(
+        &mut self,
+        view: FrameView<'_>,
+        depth_timestamp: f64,
+    ) -> Result<FrameOutput> {
+        let t = if self.tracker.config().imu_depth_time {
+            self.clock.depth_time(view.timestamp, depth_timestamp)
+        } else {
+            DepthTime::Same
+        };
+        self.push_prepared(view, t)
+    }
+
+    fn push_prepared(&mut self, view: FrameView<'_>, depth_time: DepthTime) -> Result<FrameOutput> {
         // A pooled frame that only the pool still holds is free for reuse.
         let slot = self.pool.iter().position(|f| Arc::strong_count(f) == 1);
         let mut frame = match slot {
@@ -45,7 +71,7 @@ impl Odometry {
             None => Arc::new(PreparedFrame::for_config(self.tracker.config())),
         };
         let prepared = Arc::get_mut(&mut frame).expect("a free pooled frame has one owner");
-        if let Err(e) = self.preparer.prepare_into(view, prepared) {
+        if let Err(e) = self.preparer.prepare_turned_into(view, depth_time, prepared) {
             self.pool.push(frame);
             return Err(e);
         }
@@ -63,7 +89,9 @@ impl Odometry {
     /// ([`Tracker::push_imu`], [`crate::imu`]): fails, taking none, on a batch with a
     /// non-finite value; drops and counts a sample not after the last one taken.
     pub fn push_imu(&mut self, samples: &[GyroSample]) -> Result<()> {
-        self.tracker.push_imu(samples)
+        self.tracker.push_imu(samples)?;
+        self.clock.push(samples);
+        Ok(())
     }
 
     /// Prepares the frames from the next one on with new intrinsics of the same image

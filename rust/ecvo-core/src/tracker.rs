@@ -20,7 +20,7 @@ pub use crate::correction::correction_distance;
 use crate::correction::{chain_step, fuse_correction};
 pub use crate::counters::Counters;
 use crate::error::Result;
-use crate::imu::Gyro;
+use crate::imu::{DepthTime, Gyro};
 pub use crate::lost::LostReason;
 use crate::motion::{MotionEstimator, MotionResult};
 use crate::noise::NoiseFit;
@@ -265,6 +265,11 @@ impl<F: Clone + Deref<Target = PreparedFrame>> Tracker<F> {
             registration: None,
             lost_reason: None,
         };
+        match frame.depth_time {
+            DepthTime::Turned(_) => self.counters.imu.depth_turned += 1,
+            DepthTime::Uncovered => self.counters.imu.depth_unturned += 1,
+            DepthTime::Same | DepthTime::NoGyro => {}
+        }
         let guess = self.guess.take();
         if self.prev.is_none() {
             self.anchor(frame, Pose::identity(), index);

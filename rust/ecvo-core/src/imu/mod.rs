@@ -26,10 +26,12 @@
 //!   without an IMU, bit for bit.
 
 pub mod bias;
+pub mod depth_time;
 mod gyro;
 pub mod integrate;
 mod ring;
 
+pub use depth_time::{DepthClock, DepthTime};
 pub use gyro::{Gyro, MIN_GYRO_SIGMA_RAD};
 pub use integrate::{Coverage, integrate};
 pub use ring::GyroRing;
@@ -183,4 +185,11 @@ pub struct ImuCounters {
     /// Believed \[A\]s whose rotation disagreed with the gyro beyond the filter's gate
     /// (a misregistration or a bad calibration): the bias was left alone.
     pub bias_outliers: u64,
+    /// Frames whose depth was turned to their intensity's time by the gyro
+    /// ([`depth_time`]).
+    pub depth_turned: u64,
+    /// Frames whose depth and intensity times differ but whose depth was left as it
+    /// is: the samples did not cover the interval, or it was longer than
+    /// [`depth_time::MAX_DEPTH_TIME_GAP_S`].
+    pub depth_unturned: u64,
 }

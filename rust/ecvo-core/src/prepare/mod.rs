@@ -39,6 +39,7 @@
 use crate::camera::{Camera, FrameView};
 use crate::config::{BilateralConfig, Config, FilterConfig, LookupDepth, MotionLevel};
 use crate::error::Result;
+use crate::imu::depth_time::{DepthTime, turn_depth};
 
 use rayon::prelude::*;
 
@@ -126,6 +127,9 @@ pub struct Template {
 pub struct PreparedFrame {
     /// Capture time in seconds.
     pub timestamp: f64,
+    /// Whether the depth was turned to the intensity's time
+    /// ([`Preparer::prepare_turned_into`]).
+    pub depth_time: DepthTime,
     /// Image pyramid, full resolution first.
     pub levels: Vec<ImageLevel>,
     /// Template points, one entry per step of the motion schedule, of a frame
@@ -291,6 +295,8 @@ pub struct Preparer {
     /// Scratch levels of [`Preparer::finish`] (samples only for steps with a point
     /// budget).
     side_levels: Vec<ImageLevel>,
+    /// Raw depth turned to the intensity's time ([`Preparer::prepare_turned_into`]).
+    turned: Vec<u16>,
 }
 
 impl Preparer {
@@ -326,6 +332,7 @@ impl Preparer {
             keep_normals: true,
             lookup,
             side_levels: Vec::new(),
+            turned: Vec::new(),
         }
     }
 
@@ -373,7 +380,39 @@ impl Preparer {
     /// the warp samples it (its lookup levels); its reference side is left to
     /// [`Preparer::finish`].
     pub fn prepare_into(&mut self, view: FrameView<'_>, out: &mut PreparedFrame) -> Result<()> {
+        self.prepare_turned_into(view, DepthTime::Same, out)
+    }
+
+    /// [`Preparer::prepare_into`] for a frame whose depth was captured at another time
+    /// than its intensity ([`crate::imu::depth_time`]): with
+    /// [`DepthTime::Turned`], the depth is first resampled to the intensity's time
+    /// ([`turn_depth`]); otherwise it is used as it is. `out.depth_time` says which.
+    pub fn prepare_turned_into(
+        &mut self,
+        view: FrameView<'_>,
+        depth_time: DepthTime,
+        out: &mut PreparedFrame,
+    ) -> Result<()> {
         view.validate(&self.camera)?;
+        out.depth_time = depth_time;
+        if let DepthTime::Turned(r) = depth_time {
+            let mut turned = std::mem::take(&mut self.turned);
+            turn_depth(&self.camera, &r, view.depth, &mut turned);
+            let r = self.prepare_checked(
+                FrameView {
+                    depth: &turned,
+                    ..view
+                },
+                out,
+            );
+            self.turned = turned;
+            return r;
+        }
+        self.prepare_checked(view, out)
+    }
+
+    /// [`Preparer::prepare_into`] for a view whose sizes were checked.
+    fn prepare_checked(&mut self, view: FrameView<'_>, out: &mut PreparedFrame) -> Result<()> {
         out.timestamp = view.timestamp;
         if let Some(depth) = self.lookup {
             self.prepare_lookup(view, depth, out);

@@ -253,3 +253,59 @@ fn the_prior_term_keeps_the_pan_and_is_inert_without_samples() {
     let poses = |o: &[ecvo_core::FrameOutput]| -> Vec<_> { o.iter().map(|o| o.pose).collect() };
     assert_eq!(poses(&a), poses(&b), "no samples: the prior term is inert");
 }
+
+/// Depth captured 16.7 ms after the intensity (a 60 Hz render paired two by two: the
+/// intensity of frame 2k, the depth of frame 2k + 1) on a pan reaching 190 °/s, up to
+/// 3° between the two images: pushed with its depth time, the depth is turned to the
+/// intensity's time by the gyro (`Odometry::push_with_depth_time`), and the tracked
+/// positions stay closer to the ground truth (the camera pans in place) than when the
+/// depth is taken as it is. Every frame is counted turned.
+#[test]
+fn depth_turned_to_the_intensity_time_tracks_better() {
+    let mut seq = SynthSequence::pan_320x180(48, 3, 2.5, 200f64.to_radians());
+    seq.fps = 60.0;
+    let rendered: Vec<_> = (0..seq.frames).map(|i| seq.frame(i)).collect();
+    let m = ImuModel::phone(14);
+    let imu = samples(&seq, &m, seq.timestamp(seq.frames - 1) + 0.1);
+    let mut config = super::common::config(&seq, ecvo_core::Mode::L2);
+    config.imu = calibration(&m);
+    let run = |turn: bool| {
+        let mut odo = ecvo_core::Odometry::new(config.clone()).unwrap();
+        let mut next = 0;
+        let mut worst = 0.0f64;
+        let mut se = 0.0;
+        for k in 0..seq.frames / 2 {
+            let (c, d) = (&rendered[2 * k], &rendered[2 * k + 1]);
+            let start = next;
+            while next < imu.len() && imu[next].t + m.time_offset <= d.timestamp + 0.005 {
+                next += 1;
+            }
+            odo.push_imu(&imu[start..next]).unwrap();
+            let view = ecvo_core::FrameView {
+                timestamp: c.timestamp,
+                intensity: &c.intensity,
+                depth: &d.depth,
+            };
+            let o = if turn {
+                odo.push_with_depth_time(view, d.timestamp).unwrap()
+            } else {
+                odo.push(view).unwrap()
+            };
+            assert_ne!(o.state, ecvo_core::TrackingState::Lost, "turn {turn}, frame {k}");
+            // The camera pans in place: its position is the tracking's error.
+            let truth = seq.pose(0).inverse() * c.pose;
+            let e = (o.pose.translation.vector - truth.translation.vector).norm();
+            worst = worst.max(e);
+            se += e * e;
+        }
+        let rmse = (se / (seq.frames / 2) as f64).sqrt();
+        (odo.tracker().counters().imu, rmse, worst)
+    };
+    let (plain, r0, w0) = run(false);
+    let (turned, r1, w1) = run(true);
+    eprintln!("position RMSE {r0:.4} m (worst {w0:.4}) as is, {r1:.4} m (worst {w1:.4}) turned");
+    assert_eq!((plain.depth_turned, plain.depth_unturned), (0, 0), "{plain:?}");
+    assert_eq!((turned.depth_turned, turned.depth_unturned), (24, 0), "{turned:?}");
+    // Measured 0.0053 m as is, 0.0009 m turned.
+    assert!(r1 < 0.4 * r0, "position RMSE {r1} m turned, {r0} m as is");
+}
