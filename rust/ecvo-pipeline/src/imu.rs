@@ -3,7 +3,7 @@
 //! hands the tracker those samples before the frame, so the tracker sees exactly the
 //! samples the sequential engine would, and the poses stay bit-identical.
 
-use ecvo_core::imu::{GyroRing, GyroSample, check_finite};
+use ecvo_core::imu::{DepthClock, GyroRing, GyroSample, ImuCalibration, check_finite};
 use ecvo_core::{PreparedFrame, Tracker};
 
 use crate::queue::lock;
@@ -14,15 +14,19 @@ use crate::{Pipeline, Result, Shared};
 /// are overwritten are counted (`Counters::imu.dropped`).
 pub const IMU_INBOX_CAPACITY: usize = 8192;
 
-/// The samples pushed, in push order, not yet known to be read.
+/// The samples pushed, in push order, not yet known to be read; and the depth
+/// clock, which turns a frame's depth to its intensity's time when pushed
+/// ([`Pipeline::push_with_depth_time`]).
 pub(crate) struct ImuInbox {
     pub(crate) ring: GyroRing,
+    pub(crate) clock: DepthClock,
 }
 
-impl Default for ImuInbox {
-    fn default() -> Self {
+impl ImuInbox {
+    pub(crate) fn new(calibration: ImuCalibration) -> Self {
         ImuInbox {
             ring: GyroRing::new(IMU_INBOX_CAPACITY),
+            clock: DepthClock::new(calibration),
         }
     }
 }
@@ -45,6 +49,7 @@ impl Pipeline {
         for x in samples {
             inbox.ring.push(*x);
         }
+        inbox.clock.push(samples);
         Ok(())
     }
 }

@@ -279,7 +279,7 @@ impl Pipeline {
                 tracked_at: Instant::now(),
             }),
             counters: Mutex::new(tracker.counters().clone()),
-            imu: Mutex::new(imu::ImuInbox::default()),
+            imu: Mutex::new(imu::ImuInbox::new(config.imu)),
             poses: Mutex::new(PoseLog::new(options.trajectory_window)),
             cloud: options.geometry.map(|g| Mutex::new(Cloud::new(g))),
             timers: Timers::default(),

@@ -27,7 +27,22 @@ impl Pipeline {
         timestamp: f64,
         fill: impl FnOnce(&mut [u8], &mut [u16]),
     ) -> Result<PushStatus> {
-        self.push_stamped(timestamp, None, fill)
+        self.push_stamped(timestamp, None, None, fill)
+    }
+
+    /// [`Pipeline::push`] for a frame whose depth image was captured at
+    /// `depth_timestamp` (seconds, the frames' clock), not at its intensity's
+    /// `timestamp`: with gyro samples pushed that cover the two times (and
+    /// [`ecvo_core::Config::imu_depth_time`]), its depth is turned to the intensity's
+    /// time before it is prepared, as [`ecvo_core::Odometry::push_with_depth_time`]
+    /// does, from the samples pushed before this call.
+    pub fn push_with_depth_time(
+        &self,
+        timestamp: f64,
+        depth_timestamp: f64,
+        fill: impl FnOnce(&mut [u8], &mut [u16]),
+    ) -> Result<PushStatus> {
+        self.push_stamped(timestamp, None, Some(depth_timestamp), fill)
     }
 
     /// [`Pipeline::push`] with the timestamp in integer nanoseconds, as cameras give
@@ -40,13 +55,14 @@ impl Pipeline {
         timestamp_ns: i64,
         fill: impl FnOnce(&mut [u8], &mut [u16]),
     ) -> Result<PushStatus> {
-        self.push_stamped(timestamp_ns as f64 / 1e9, Some(timestamp_ns), fill)
+        self.push_stamped(timestamp_ns as f64 / 1e9, Some(timestamp_ns), None, fill)
     }
 
     fn push_stamped(
         &self,
         timestamp: f64,
         timestamp_ns: Option<i64>,
+        depth_timestamp: Option<f64>,
         fill: impl FnOnce(&mut [u8], &mut [u16]),
     ) -> Result<PushStatus> {
         let pushed_at = Instant::now();
@@ -97,7 +113,14 @@ impl Pipeline {
         raw.timestamp = timestamp;
         raw.pushed_at = pushed_at;
         raw.sequence = s.next_sequence.fetch_add(1, Ordering::Relaxed);
-        raw.imu_upto = lock(&s.imu).ring.pushed();
+        {
+            let inbox = lock(&s.imu);
+            raw.imu_upto = inbox.ring.pushed();
+            raw.depth_time = match depth_timestamp {
+                Some(d) if self.config.imu_depth_time => inbox.clock.depth_time(timestamp, d),
+                _ => ecvo_core::imu::DepthTime::Same,
+            };
+        }
         {
             let mut p = lock(&s.progress);
             p.pushed += 1;
@@ -154,6 +177,20 @@ impl Pipeline {
     pub fn push_view(&self, view: FrameView<'_>) -> Result<PushStatus> {
         view.validate(&self.config.camera)?;
         self.push(view.timestamp, |i, d| {
+            i.copy_from_slice(view.intensity);
+            d.copy_from_slice(view.depth);
+        })
+    }
+
+    /// [`Pipeline::push_view`] for a frame whose depth image was taken at
+    /// `depth_timestamp` ([`Pipeline::push_with_depth_time`]).
+    pub fn push_view_with_depth_time(
+        &self,
+        view: FrameView<'_>,
+        depth_timestamp: f64,
+    ) -> Result<PushStatus> {
+        view.validate(&self.config.camera)?;
+        self.push_with_depth_time(view.timestamp, depth_timestamp, |i, d| {
             i.copy_from_slice(view.intensity);
             d.copy_from_slice(view.depth);
         })

@@ -14,6 +14,9 @@ pub(crate) struct RawFrame {
     pub(crate) camera: Camera,
     /// IMU samples pushed before it ([`crate::Pipeline::push_imu`]).
     pub(crate) imu_upto: u64,
+    /// Its depth's time against its intensity's
+    /// ([`crate::Pipeline::push_with_depth_time`]).
+    pub(crate) depth_time: ecvo_core::imu::DepthTime,
 }
 
 pub(crate) struct RawPool {
@@ -48,6 +51,7 @@ impl RawFrame {
             depth: vec![0; camera.pixels()],
             camera,
             imu_upto: 0,
+            depth_time: ecvo_core::imu::DepthTime::Same,
         }
     }
 }

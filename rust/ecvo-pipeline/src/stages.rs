@@ -60,7 +60,7 @@ pub(crate) fn filter_stage(
             } else {
                 preparer.set_intrinsics(raw.camera)
             }
-            .and_then(|()| preparer.prepare_into(view, prepared));
+            .and_then(|()| preparer.prepare_turned_into(view, raw.depth_time, prepared));
             // The tracker is behind when its queue is full: this frame would wait.
             let behind = s.prepared.len() >= s.prepared.capacity();
             let ahead = match (&r, &last) {

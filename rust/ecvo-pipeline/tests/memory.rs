@@ -114,7 +114,9 @@ fn memory_needed_bounds_the_peak_and_everything_is_given_back() {
 fn the_imu_inbox_is_counted_and_allocated_once() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let (config, _) = common::synthetic(1, 3);
-    let inbox = IMU_INBOX_CAPACITY * size_of::<GyroSample>();
+    // The inbox and the depth clock beside it (`Pipeline::push_with_depth_time`).
+    let inbox = (IMU_INBOX_CAPACITY + ecvo_core::imu::depth_time::DEPTH_CLOCK_CAPACITY)
+        * size_of::<GyroSample>();
     let pipeline = Pipeline::new(config, PipelineOptions::default()).expect("valid");
     let samples = gyro(0.0, 60.0);
     let base = CURRENT.load(Ordering::Relaxed);

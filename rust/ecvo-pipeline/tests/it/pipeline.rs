@@ -453,9 +453,12 @@ fn full_resolution_tum_stream_matches_one_thread_odometry_at_1_2_and_4_threads()
     tum_stream_matches_one_thread_odometry("tum_fr1_xyz_full300", 20, &[1, 2, 4]);
 }
 
-/// With gyroscope samples pushed beside the frames, the pipeline's poses and counters
-/// are still the sequential engine's, bit for bit, at 1 and 2 threads (the tracker
-/// stage hands the tracker exactly the samples pushed before each frame).
+/// With gyroscope samples pushed beside the frames, and depth stamped 10 ms off the
+/// intensity (after it on even frames, before it on odd ones: turned to the
+/// intensity's time, `push_with_depth_time`), the pipeline's poses and counters are
+/// still the sequential engine's, bit for bit, at 1 and 2 threads (the tracker stage
+/// hands the tracker exactly the samples pushed before each frame; both turn the
+/// depth from the samples pushed before the frame).
 #[test]
 fn offline_poses_with_an_imu_equal_sequential_odometry_bit_for_bit() {
     let (config, frames, imu) = common::pan_with_imu(30, 4);
@@ -464,14 +467,17 @@ fn offline_poses_with_an_imu_equal_sequential_odometry_bit_for_bit() {
     let mut next = 0;
     let expected: Vec<FrameOutput> = frames
         .iter()
-        .map(|f| {
-            odo.push_imu(common::imu_before(&imu, &mut next, f.timestamp, offset))
+        .enumerate()
+        .map(|(i, f)| {
+            odo.push_imu(common::imu_before(&imu, &mut next, f.timestamp + 0.01, offset))
                 .unwrap();
-            odo.push(f.view()).unwrap()
+            odo.push_with_depth_time(f.view(), depth_time(i, f.timestamp))
+                .unwrap()
         })
         .collect();
     let c = odo.tracker().counters();
     assert_eq!((c.imu.priors, c.lost_frames), (29, 0), "{:?}", c.imu);
+    assert_eq!((c.imu.depth_turned, c.imu.depth_unturned), (30, 0), "{:?}", c.imu);
     for threads in [1, 2] {
         let pipeline = Pipeline::new(
             config.clone(),
@@ -483,11 +489,16 @@ fn offline_poses_with_an_imu_equal_sequential_odometry_bit_for_bit() {
         )
         .unwrap();
         let mut next = 0;
-        for f in &frames {
+        for (i, f) in frames.iter().enumerate() {
             pipeline
-                .push_imu(common::imu_before(&imu, &mut next, f.timestamp, offset))
+                .push_imu(common::imu_before(&imu, &mut next, f.timestamp + 0.01, offset))
                 .unwrap();
-            pipeline.push_view(f.view()).unwrap();
+            pipeline
+                .push_with_depth_time(f.timestamp, depth_time(i, f.timestamp), |a, b| {
+                    a.copy_from_slice(&f.intensity);
+                    b.copy_from_slice(&f.depth);
+                })
+                .unwrap();
         }
         let summary = pipeline.finish().unwrap();
         for (i, (r, e)) in summary.trajectory.iter().zip(&expected).enumerate() {
@@ -499,4 +510,10 @@ fn offline_poses_with_an_imu_equal_sequential_odometry_bit_for_bit() {
         }
         assert_eq!(&summary.stats.counters, odo.tracker().counters());
     }
+}
+
+/// Frame `i`'s depth time: 10 ms after its intensity's `t` on even frames, before it
+/// on odd ones.
+fn depth_time(i: usize, t: f64) -> f64 {
+    if i % 2 == 0 { t + 0.01 } else { t - 0.01 }
 }
