@@ -323,10 +323,11 @@ pub fn track_sequence(
         }
         if let Some(f) = &mut imu {
             pipeline
-                .push_imu(f.before(frame.timestamp))
+                .push_imu(f.before(frame.timestamp.max(frame.depth_timestamp)))
                 .context("pushing IMU samples")?;
         }
-        match pipeline.push_view(frame.view()) {
+        // With the depth's own time: turned to the intensity's by the gyro, if any.
+        match pipeline.push_view_with_depth_time(frame.view(), frame.depth_timestamp) {
             Ok(PushStatus::Repeated) => {
                 // Bit-identical to the previous frame: not tracked (counted in the
                 // pipeline's statistics).

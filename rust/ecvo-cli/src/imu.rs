@@ -197,7 +197,8 @@ pub fn from_groundtruth(seq: &Path, out: &Path, seed: u64, knot: f64) -> Result<
 pub fn report(stream: &ImuStream, c: &ecvo_core::imu::ImuCounters) -> (String, serde_json::Value) {
     let line = format!(
         "IMU {}: {} samples taken ({} refused as out of order), {} frames with a gyro prior, \
-         {} tracked without it (samples late {}, missing {}), bias updates {} ({} outliers)",
+         {} tracked without it (samples late {}, missing {}), bias updates {} ({} outliers), \
+         depth turned to the intensity's time {} (not covered {})",
         shown_path(&stream.path),
         c.samples,
         c.refused,
@@ -206,7 +207,9 @@ pub fn report(stream: &ImuStream, c: &ecvo_core::imu::ImuCounters) -> (String, s
         c.late,
         c.missing,
         c.bias_updates,
-        c.bias_outliers
+        c.bias_outliers,
+        c.depth_turned,
+        c.depth_unturned
     );
     let json = serde_json::json!({
         "file": stream.path.display().to_string(),
@@ -221,6 +224,8 @@ pub fn report(stream: &ImuStream, c: &ecvo_core::imu::ImuCounters) -> (String, s
         "missing": c.missing,
         "bias_updates": c.bias_updates,
         "bias_outliers": c.bias_outliers,
+        "depth_turned": c.depth_turned,
+        "depth_unturned": c.depth_unturned,
     });
     (line, json)
 }

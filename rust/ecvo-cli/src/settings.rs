@@ -89,6 +89,8 @@ pub struct EngineChoice {
     pub imu_fusion: Option<bool>,
     /// The gyro's rotation as a prior term in `MOTION` (`Config::imu_prior_term`).
     pub imu_prior_term: Option<bool>,
+    /// Turn a frame's depth to its intensity's time (`Config::imu_depth_time`).
+    pub imu_depth_time: Option<bool>,
 }
 
 impl EngineChoice {
@@ -244,6 +246,7 @@ impl TrackSettings {
             keyframe_fuse_every: e.keyframe_fuse_every,
             imu_fusion: e.imu_fusion,
             imu_prior_term: e.imu_prior_term,
+            imu_depth_time: e.imu_depth_time,
             memory_budget: self.max_memory,
         }
     }

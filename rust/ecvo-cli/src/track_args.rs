@@ -97,6 +97,16 @@ pub(crate) struct TrackArgs {
         value_name = "true|false"
     )]
     pub(crate) imu_prior_term: Option<bool>,
+    /// With a gyroscope: turn each frame's depth, when its image was taken at another
+    /// time than the intensity (TUM's depth.txt stamps), to the intensity's time by
+    /// the gyro's rotation between the two (on by default; docs/imu.md)
+    #[arg(
+        help_heading = "Tuning",
+        display_order = 41,
+        long,
+        value_name = "true|false"
+    )]
+    pub(crate) imu_depth_time: Option<bool>,
     /// What an accepted correction does to the frame-to-frame chain: fuse (weighed by
     /// their covariances) or replace (the paper's).
     #[arg(help_heading = "Tuning", display_order = 25, long, value_enum)]
@@ -284,6 +294,7 @@ impl TrackArgs {
             keyframe_fuse_every: self.keyframe_fuse_every,
             imu_fusion: self.imu_fusion.then_some(true),
             imu_prior_term: self.imu_prior_term,
+            imu_depth_time: self.imu_depth_time,
         };
         TrackSettings {
             frame_step: self.frame_step as usize,

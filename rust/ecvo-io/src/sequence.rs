@@ -50,6 +50,9 @@ pub struct Frame {
     pub index: usize,
     /// Time of the frame in seconds.
     pub timestamp: f64,
+    /// Time of its depth image in seconds ([`FrameInfo::depth_timestamp`]; equal to
+    /// `timestamp` when the two images are taken together).
+    pub depth_timestamp: f64,
     /// 8-bit gray intensity.
     pub intensity: Vec<u8>,
     /// Raw 16-bit depth (camera `depth_scale` units per metre, 0 = no measurement).
@@ -346,6 +349,7 @@ pub(crate) fn load_into(
     read_depth_png(&info.depth, camera.width, camera.height, &mut frame.depth)?;
     frame.index = index;
     frame.timestamp = info.timestamp;
+    frame.depth_timestamp = info.depth_timestamp;
     Ok(())
 }
 

@@ -295,10 +295,11 @@ fn track(
         let frame = item.map_err(crate::io_err)?;
         if let Some(f) = &mut imu {
             pipeline
-                .push_imu(f.before(frame.timestamp))
+                .push_imu(f.before(frame.timestamp.max(frame.depth_timestamp)))
                 .map_err(|e| err(format!("IMU samples: {e}")))?;
         }
-        match pipeline.push_view(frame.view()) {
+        // As `ecvo run`: the depth's own time, turned to the intensity's by the gyro.
+        match pipeline.push_view_with_depth_time(frame.view(), frame.depth_timestamp) {
             Ok(PushStatus::Repeated) | Err(ecvo_pipeline::Error::TimestampNotIncreasing { .. }) => {
             }
             Ok(_) => {}

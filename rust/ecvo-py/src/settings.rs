@@ -37,6 +37,7 @@ pub const ENGINE_KEYS: &[&str] = &[
     "keyframe_fuse_every",
     "imu_fusion",
     "imu_prior_term",
+    "imu_depth_time",
     "memory_budget",
 ];
 
@@ -225,6 +226,7 @@ impl EngineSettings {
             keyframe_fuse_every: kw.take("keyframe_fuse_every", "an int >= 0")?,
             imu_fusion: kw.take("imu_fusion", "a bool")?,
             imu_prior_term: kw.take("imu_prior_term", "a bool")?,
+            imu_depth_time: kw.take("imu_depth_time", "a bool")?,
             memory_budget: kw.take("memory_budget", "an int (bytes)")?,
         }))
     }

@@ -135,7 +135,9 @@ impl Inner {
 /// clock; default 0), gyro_noise_density (rad/s/√Hz), gyro_bias_random_walk
 /// (rad/s/√s), imu_fusion (bool, default False: also fuse the gyro's rotation
 /// into each believed registration) and imu_prior_term (bool, default True: the
-/// gyro's rotation is also a prior term in the registration's normal equations). An
+/// gyro's rotation is also a prior term in the registration's normal equations),
+/// imu_depth_time (bool, default True: a depth pushed with its own depth_timestamp
+/// is turned to the intensity's time by the gyro). An
 /// unknown keyword is a TypeError, a bad value a ValueError.
 ///
 /// One tracker serves one thread at a time (another thread calling it meanwhile
@@ -267,9 +269,14 @@ impl PyTracker {
     /// velocity. Registration starts from the identity and from the guess, and the
     /// better start wins at the coarsest level; ignored on the first frame.
     ///
+    /// depth_timestamp: when the depth image was taken (seconds, the frames' clock),
+    /// if not with the intensity: with gyroscope samples pushed that cover the two
+    /// times, the depth is turned to the intensity's time by the gyro's rotation
+    /// between them (imu_depth_time=False turns this off).
+    ///
     /// A wrong type or dtype is a TypeError; a wrong shape, an out-of-range value,
     /// a non-increasing timestamp or a closed tracker a ValueError.
-    #[pyo3(signature = (timestamp, intensity, depth = None, channels = "rgb", initial_guess = None, rotation_guess = None))]
+    #[pyo3(signature = (timestamp, intensity, depth = None, channels = "rgb", initial_guess = None, rotation_guess = None, depth_timestamp = None))]
     fn push<'py>(
         &self,
         py: Python<'py>,
@@ -279,6 +286,7 @@ impl PyTracker {
         channels: &str,
         initial_guess: Option<&Bound<'py, PyAny>>,
         rotation_guess: Option<&Bound<'py, PyAny>>,
+        depth_timestamp: Option<f64>,
     ) -> PyResult<PyFrameResult> {
         let mut guard = self.lock()?;
         let this = &mut *guard;
@@ -352,7 +360,10 @@ impl PyTracker {
         let (out, engine_s) = py.detach(|| {
             in_pool(pool, || {
                 let t0 = Instant::now();
-                let out = odo.push(view);
+                let out = match depth_timestamp {
+                    Some(d) => odo.push_with_depth_time(view, d),
+                    None => odo.push(view),
+                };
                 (out, t0.elapsed().as_secs_f64())
             })
         });
@@ -525,6 +536,7 @@ pub fn _engine_push_times(
         owned.push(ecvo_io::Frame {
             index: owned.len(),
             timestamp: *t,
+            depth_timestamp: *t,
             intensity: i.as_array().iter().copied().collect(),
             depth: d.as_array().iter().copied().collect(),
         });

@@ -75,6 +75,10 @@ pub struct Settings {
     /// With a gyroscope, its rotation is also a prior term in `MOTION`'s normal
     /// equations ([`Config::imu_prior_term`]; `None`: the engine's default).
     pub imu_prior_term: Option<bool>,
+    /// With a gyroscope, a frame's depth captured at another time than its intensity
+    /// is turned to the intensity's time ([`Config::imu_depth_time`]; `None`: the
+    /// engine's default).
+    pub imu_depth_time: Option<bool>,
     /// The memory budget in bytes (`None`: the engine's default).
     pub memory_budget: Option<usize>,
 }
@@ -190,6 +194,7 @@ impl Settings {
             keyframe_fuse_every: None,
             imu_fusion: None,
             imu_prior_term: None,
+            imu_depth_time: None,
             memory_budget: None,
         }
     }
@@ -270,6 +275,9 @@ impl Settings {
         }
         if let Some(f) = self.imu_prior_term {
             config.imu_prior_term = f;
+        }
+        if let Some(f) = self.imu_depth_time {
+            config.imu_depth_time = f;
         }
         if let Some(text) = &self.levels {
             config.reference_levels = parse_levels(text).map_err(|e| parse("levels", text, e))?;
@@ -381,6 +389,7 @@ mod tests {
         let c = Settings::default().config(camera()).unwrap();
         assert_eq!(c.imu_fusion, engine.imu_fusion);
         assert_eq!(c.imu_prior_term, engine.imu_prior_term);
+        assert_eq!(c.imu_depth_time, engine.imu_depth_time);
         for on in [true, false] {
             let c = Settings {
                 imu_fusion: Some(on),
@@ -396,6 +405,13 @@ mod tests {
             .config(camera())
             .unwrap();
             assert_eq!(c.imu_prior_term, on);
+            let c = Settings {
+                imu_depth_time: Some(on),
+                ..Settings::default()
+            }
+            .config(camera())
+            .unwrap();
+            assert_eq!(c.imu_depth_time, on);
         }
     }
 }

@@ -259,7 +259,9 @@ class Tracker:
     clock; default 0), gyro_noise_density (rad/s/√Hz), gyro_bias_random_walk
     (rad/s/√s), imu_fusion (bool, default False: also fuse the gyro's rotation
     into each believed registration) and imu_prior_term (bool, default True: the
-    gyro's rotation is also a prior term in the registration's normal equations). An
+    gyro's rotation is also a prior term in the registration's normal equations),
+    imu_depth_time (bool, default True: a depth pushed with its own depth_timestamp
+    is turned to the intensity's time by the gyro). An
     unknown keyword is a TypeError, a bad value a ValueError.
 
     One tracker serves one thread at a time (another thread calling it meanwhile
@@ -283,6 +285,7 @@ class Tracker:
         channels: _Channels = "rgb",
         initial_guess: Optional[npt.ArrayLike] = None,
         rotation_guess: Optional[npt.ArrayLike] = None,
+        depth_timestamp: Optional[float] = None,
     ) -> FrameResult:
         """Tracks one frame and returns its FrameResult (which unpacks as (pose,
         state)). Timestamps (seconds) must increase.
@@ -305,6 +308,11 @@ class Tracker:
         previous frame's (a gyroscope's), the translation then predicted from the
         velocity. Registration starts from the identity and from the guess, and the
         better start wins at the coarsest level; ignored on the first frame.
+
+        depth_timestamp: when the depth image was taken (seconds, the frames' clock),
+        if not with the intensity: with gyroscope samples pushed that cover the two
+        times, the depth is turned to the intensity's time by the gyro's rotation
+        between them (imu_depth_time=False turns this off).
 
         A wrong type or dtype is a TypeError; a wrong shape, an out-of-range value,
         a non-increasing timestamp or a closed tracker a ValueError."""
