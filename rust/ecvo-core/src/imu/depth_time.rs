@@ -18,6 +18,7 @@ use nalgebra::{UnitQuaternion, Vector3};
 
 use super::{Coverage, GyroRing, GyroSample, ImuCalibration, integrate};
 use crate::camera::Camera;
+use crate::prepare::simd::multiversion;
 
 /// Samples [`DepthClock`] keeps: 0.64 s at 400 Hz, 8 KiB, allocated at the first
 /// push. The interval it integrates is at most [`MAX_DEPTH_TIME_GAP_S`] back from the
@@ -112,35 +113,85 @@ pub fn turn_depth(camera: &Camera, r: &UnitQuaternion<f64>, src: &[u16], dst: &m
     let (w, h) = (camera.width, camera.height);
     dst.clear();
     dst.resize(w * h, 0);
-    let m = r.to_rotation_matrix();
-    let m = m.matrix();
+    let m = *r.to_rotation_matrix().matrix();
     let (fx, fy, cx, cy) = (camera.fx, camera.fy, camera.cx, camera.cy);
-    for y in 0..h {
+    // q(x) = M [(x - cx)/fx, ry, 1] = base + x * step along a row, in f32.
+    let step = (m.column(0) / fx).map(|v| v as f32);
+    let k = [fx as f32, fy as f32, cx as f32, cy as f32];
+    for (y, row) in dst.chunks_exact_mut(w).enumerate() {
         let ry = (y as f64 - cy) / fy;
-        // q(x) = M [(x - cx)/fx, ry, 1] = base + x * step.
-        let base = m * nalgebra::Vector3::new(-cx / fx, ry, 1.0);
-        let step = m.column(0) / fx;
-        let row = &mut dst[y * w..(y + 1) * w];
-        for (x, out) in row.iter_mut().enumerate() {
-            let q = base + step * x as f64;
-            if !(q.z > 0.0) {
-                continue;
-            }
-            let u = fx * q.x / q.z + cx;
-            let v = fy * q.y / q.z + cy;
-            let (ui, vi) = (u.round(), v.round());
-            if !(ui >= 0.0 && vi >= 0.0 && ui < w as f64 && vi < h as f64) {
-                continue;
-            }
-            let d = src[vi as usize * w + ui as usize];
-            if d == 0 {
-                continue;
-            }
+        let base = (m * Vector3::new(-cx / fx, ry, 1.0)).map(|v| v as f32);
+        turn_row(src, w, h, base.into(), step.into(), k, row);
+    }
+}
+
+/// `x` rounded to the nearest integer (ties to even) for `|x| < 2²²`: the mantissa of
+/// `x + 1.5·2²³` (whose unit in the last place is 1), less 2²², which vectorises
+/// where `as i32` (saturating, NaN to 0) does not. Garbage outside that range (the
+/// callers mask it).
+#[inline(always)]
+fn nearest(x: f32) -> i32 {
+    ((x + 12_582_912.0).to_bits() & 0x7F_FFFF) as i32 - 0x40_0000
+}
+
+/// Pixels a pass of [`turn_row_kernel`] projects before it looks them up.
+const CHUNK: usize = 64;
+
+multiversion! {
+    /// One output row of [`turn_depth`].
+    fn turn_row(
+        src: &[u16],
+        w: usize,
+        h: usize,
+        base: [f32; 3],
+        step: [f32; 3],
+        k: [f32; 4],
+        row: &mut [u16],
+    ) = turn_row_kernel;
+}
+
+/// In chunks: a pass that projects (and vectorises, division included), then the
+/// lookups, rounding to the nearest pixel ([`nearest`]); a pixel whose ray leaves the
+/// image looks up pixel 0 with a scale of 0, which writes 0.
+#[inline(always)]
+fn turn_row_kernel(
+    src: &[u16],
+    w: usize,
+    h: usize,
+    base: [f32; 3],
+    step: [f32; 3],
+    k: [f32; 4],
+    row: &mut [u16],
+) {
+    let [fx, fy, cx, cy] = k;
+    let (wf, hf) = (w as f32 - 0.5, h as f32 - 0.5);
+    let mut at = [0i32; CHUNK];
+    let mut scale = [0f32; CHUNK];
+    for (c, out) in row.chunks_mut(CHUNK).enumerate() {
+        let x0 = (c * CHUNK) as f32;
+        let n = out.len();
+        for (j, (a, s)) in at[..n].iter_mut().zip(&mut scale[..n]).enumerate() {
+            let xf = x0 + j as f32;
+            let qx = base[0] + step[0] * xf;
+            let qy = base[1] + step[1] * xf;
+            let qz = base[2] + step[2] * xf;
+            let inv = 1.0 / qz;
+            let u = fx * qx * inv + cx;
+            let v = fy * qy * inv + cy;
+            let inside = qz > 0.0 && u >= -0.5 && v >= -0.5 && u < wf && v < hf;
+            // Wrapping: garbage outside the image, masked just below.
+            let i = nearest(v).wrapping_mul(w as i32).wrapping_add(nearest(u));
+            *a = if inside { i } else { 0 };
+            *s = if inside { inv } else { 0.0 };
+        }
+        for ((o, &a), &s) in out.iter_mut().zip(&at[..n]).zip(&scale[..n]) {
             // The point d·q/q_z in the depth camera; along the intensity camera's
-            // axis (its ray has z = 1) its depth is d / q_z.
-            *out = (d as f64 / q.z).round().min(u16::MAX as f64) as u16;
+            // axis (its ray has z = 1) its depth is d / q_z (saturating at u16::MAX;
+            // 0 stays 0).
+            *o = nearest(src[a as usize] as f32 * s).min(i32::from(u16::MAX)) as u16;
         }
     }
+    debug_assert!(src.len() >= w * h);
 }
 
 #[cfg(test)]
@@ -178,6 +229,12 @@ mod tests {
         }
         let mut dst = Vec::new();
         turn_depth(&c, &r, &src, &mut dst);
+        // Every kernel copy (baseline, AVX2, AVX-512) gives the same bits.
+        crate::prepare::simd::on_each_path(|path| {
+            let mut other = Vec::new();
+            turn_depth(&c, &r, &src, &mut other);
+            assert!(other == dst, "the {path} copy differs");
+        });
         let mut checked = 0;
         for y in 10..h - 10 {
             for x in 20..w - 20 {
@@ -196,6 +253,14 @@ mod tests {
         let q = Vector3::new((x as f64 - c.cx) / c.fx, (y as f64 - c.cy) / c.fy, 1.0);
         let want = depth_of(q).z * c.depth_scale;
         assert!((src[y * w + x] as f64 - want).abs() > 12.0);
+    }
+
+    /// [`nearest`] rounds as `f32::round_ties_even` over the range it serves.
+    #[test]
+    fn nearest_rounds_to_the_nearest_integer() {
+        for x in [-0.5f32, -0.49, -0.2, 0.0, 0.49, 0.5, 0.51, 1.5, 2.5, 319.4, 319.6, 65535.4, 78000.7] {
+            assert_eq!(nearest(x), x.round_ties_even() as i32, "{x}");
+        }
     }
 
     /// Pixels turned out of the depth image, and missing depth, stay missing.
