@@ -326,6 +326,12 @@ enum Command {
         /// and time offset in camera.json).
         #[arg(long)]
         no_imu: bool,
+        /// Take each depth image this many milliseconds after its intensity image
+        /// (before it if negative; |delay| < 20, the readers pair images at most 20 ms
+        /// apart), stamped so in depth.txt, as a Kinect's two streams are: 0 by
+        /// default.
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        depth_delay_ms: f64,
     },
     /// Make a SIMULATED imu.txt for a real sequence from its groundtruth.txt: a smooth
     /// spline through the poses, its derivatives, then a phone IMU's noise, bias,
@@ -450,6 +456,7 @@ fn dispatch(command: Command) -> Result<()> {
             texture_contrast,
             size,
             no_imu,
+            depth_delay_ms,
         } => synth::synth_command(
             &out,
             frames,
@@ -465,6 +472,7 @@ fn dispatch(command: Command) -> Result<()> {
                 size,
             },
             !no_imu,
+            depth_delay_ms / 1e3,
         ),
         Command::ImuFromGroundtruth {
             seq,

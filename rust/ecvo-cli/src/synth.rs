@@ -187,7 +187,9 @@ impl MotionArgs {
 /// [`SynthSequence::orbit_320x180`] with `--motion orbit`) and writes them to `out` (TUM
 /// layout, `camera.json`, `groundtruth.txt`). Frame `i` is stamped
 /// `start_time + i / 30` seconds (as written, to the microsecond); the ground truth
-/// holds exactly the rendered poses at those stamps.
+/// holds exactly the rendered poses at those stamps. With `depth_delay` (seconds),
+/// each depth image is rendered that much later and stamped so.
+#[allow(clippy::too_many_arguments)]
 pub fn synth_command(
     out: &Path,
     frames: usize,
@@ -196,9 +198,18 @@ pub fn synth_command(
     start_time: f64,
     motion: &MotionArgs,
     with_imu: bool,
+    depth_delay: f64,
 ) -> Result<()> {
     if frames < 2 {
         bail!("--frames must be at least 2, got {frames}");
+    }
+    if !(depth_delay.abs() < ecvo_io::sequence::MAX_RGB_DEPTH_DT) {
+        bail!(
+            "--depth-delay-ms must be within ±{} ms (the readers pair images at most that far \
+             apart), got {}",
+            ecvo_io::sequence::MAX_RGB_DEPTH_DT * 1e3,
+            depth_delay * 1e3
+        );
     }
     if !(start_time.is_finite() && start_time >= 0.0) {
         bail!("--start-time must be finite and not negative, got {start_time}");
@@ -222,13 +233,13 @@ pub fn synth_command(
     let mut writer = SequenceWriter::create(out, &camera)?;
     let mut gt = Trajectory::with_capacity(frames);
     for i in 0..frames {
-        let f = seq.frame(i);
+        let f = seq.frame_with_depth_delay(i, depth_delay);
         // The writer stores stamps to the microsecond; the ground truth uses the
         // stamp as written so that frames and poses associate exactly.
         let stamp: f64 = format!("{:.6}", start_time + f.timestamp)
             .parse()
             .context("formatting a timestamp")?;
-        writer.write_frame(stamp, &f.intensity, &f.depth)?;
+        writer.write_frame_stamped(stamp, stamp + depth_delay, &f.intensity, &f.depth)?;
         gt.push(stamp, f.pose);
     }
     writer.write_groundtruth(&gt)?;

@@ -100,7 +100,27 @@ impl SequenceWriter {
     /// `timestamp` must be finite and, once formatted as `{:.6}`, after the previous
     /// frame's; both buffers must hold `width * height` values.
     pub fn write_frame(&mut self, timestamp: f64, intensity: &[u8], depth: &[u16]) -> Result<()> {
+        self.write_frame_stamped(timestamp, timestamp, intensity, depth)
+    }
+
+    /// [`Self::write_frame`] with the depth image stamped `depth_timestamp` (in
+    /// `depth.txt` and its file name), taken at another time than the intensity, as a
+    /// Kinect's two streams are. The order check is on `timestamp`.
+    pub fn write_frame_stamped(
+        &mut self,
+        timestamp: f64,
+        depth_timestamp: f64,
+        intensity: &[u8],
+        depth: &[u16],
+    ) -> Result<()> {
         let name = format!("{timestamp:.6}");
+        let depth_name = format!("{depth_timestamp:.6}");
+        if !depth_name.parse::<f64>().is_ok_and(|d| d.is_finite() && d >= 0.0) {
+            return Err(Error::InvalidInput(format!(
+                "{}: depth timestamp {depth_timestamp} must be finite and not negative",
+                self.dir.display()
+            )));
+        }
         let stamp: f64 = name.parse().unwrap_or(f64::NAN);
         if !stamp.is_finite() || stamp < 0.0 {
             return Err(Error::InvalidInput(format!(
@@ -118,7 +138,7 @@ impl SequenceWriter {
         }
         let (w, h) = (self.camera.width, self.camera.height);
         let rgb_rel = format!("rgb/{name}.png");
-        let depth_rel = format!("depth/{name}.png");
+        let depth_rel = format!("depth/{depth_name}.png");
         write_intensity_png(self.dir.join(&rgb_rel), intensity, w, h)?;
         write_depth_png(self.dir.join(&depth_rel), depth, w, h)?;
         let rgb_path = self.dir.join("rgb.txt");
@@ -126,7 +146,7 @@ impl SequenceWriter {
             .and_then(|()| self.rgb_list.flush())
             .map_err(|e| Error::io(&rgb_path, e))?;
         let depth_path = self.dir.join("depth.txt");
-        writeln!(self.depth_list, "{name} {depth_rel}")
+        writeln!(self.depth_list, "{depth_name} {depth_rel}")
             .and_then(|()| self.depth_list.flush())
             .map_err(|e| Error::io(&depth_path, e))?;
         self.last_stamp = Some(stamp);

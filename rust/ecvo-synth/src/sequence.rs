@@ -94,6 +94,20 @@ impl SynthSequence {
         }
     }
 
+    /// Frame `i` with its depth taken `delay` seconds after its intensity (before it if
+    /// negative), as by an RGB-D camera whose two streams are not triggered together:
+    /// the depth is rendered from the path's pose at `timestamp(i) + delay`, with frame
+    /// `i`'s noise; the intensity, the pose and the timestamp are frame `i`'s.
+    pub fn frame_with_depth_delay(&self, i: usize, delay: f64) -> SynthFrame {
+        let mut f = self.frame(i);
+        if delay != 0.0 {
+            let pose = self.path.pose_at(self.timestamp(i) + delay);
+            let rendered = render(&self.scene, &self.camera, &pose);
+            (_, f.depth) = apply_noise(&rendered, &self.camera, &self.noise, self.frame_seed(i));
+        }
+        f
+    }
+
     /// Iterator over all `frames` frames.
     pub fn iter(&self) -> impl Iterator<Item = SynthFrame> + '_ {
         (0..self.frames).map(|i| self.frame(i))
