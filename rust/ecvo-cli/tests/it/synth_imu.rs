@@ -58,3 +58,48 @@ fn a_pan_with_a_gyro_is_written_tracked_and_reported() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `ecvo synth --depth-delay-ms` stamps each depth image that much after its
+/// intensity (a delay the readers cannot pair, 20 ms or more, is refused); `ecvo
+/// run` turns every frame's depth to its intensity's time with the gyro, counts it,
+/// and tracks closer to the ground truth than with `--imu-depth-time false`.
+#[test]
+fn depth_taken_after_the_intensity_is_turned_with_the_gyro() {
+    let dir = temp_dir("synth-depth-delay");
+    let seq = dir.join("pan");
+    let s = seq.to_str().unwrap();
+    let e = run(&["synth", "--out", s, "--depth-delay-ms", "20"]);
+    assert!(!e.status.success());
+    assert!(String::from_utf8_lossy(&e.stderr).contains("--depth-delay-ms"));
+    run_ok(&[
+        "synth", "--out", s, "--frames", "40", "--seed", "3", "--motion", "pan",
+        "--max-rot-speed", "200", "--depth-delay-ms", "15",
+    ]);
+    let list = |f: &str| -> Vec<f64> {
+        std::fs::read_to_string(seq.join(f))
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with('#'))
+            .map(|l| l.split_whitespace().next().unwrap().parse().unwrap())
+            .collect()
+    };
+    let (rgb, depth) = (list("rgb.txt"), list("depth.txt"));
+    assert_eq!(rgb.len(), 40);
+    for (r, d) in rgb.iter().zip(&depth) {
+        assert!((d - r - 0.015).abs() < 2e-6, "{r} {d}");
+    }
+    let ate = |flags: &[&str]| {
+        let out = dir.join("out");
+        let mut args = vec!["run", s, "--out", out.to_str().unwrap()];
+        args.extend_from_slice(flags);
+        run_ok(&args);
+        let sm = summary(&out);
+        (sm["ate_rmse_m"].as_f64().unwrap(), sm["imu"]["depth_turned"].as_u64().unwrap())
+    };
+    let (turned, n) = ate(&[]);
+    let (as_is, m) = ate(&["--imu-depth-time", "false"]);
+    eprintln!("ATE {turned:.5} m turned ({n} frames), {as_is:.5} m as is");
+    assert_eq!((n, m), (40, 0));
+    assert!(turned < as_is, "ATE {turned} m turned, {as_is} m as is");
+    let _ = std::fs::remove_dir_all(&dir);
+}
