@@ -12,7 +12,9 @@
 # Writes OUTDIR/pan_<deg>/ and OUTDIR/suite.txt (one stream folder per line). `ecvo
 # run` uses the imu.txt; `--no-imu` tracks without it. Keep OUTDIR outside the
 # repository. Environment: ECVO (the ecvo binary; default target/release/ecvo, built
-# if missing), RATES (default "60 120 200"), FRAMES (default 150), SEED (default 3).
+# if missing), RATES (default "60 120 200"), FRAMES (default 150), SEED (default 3),
+# DEPTH_DELAY_MS (default 0: each depth image taken that much after its intensity, as
+# a Kinect's unsynchronised streams; `ecvo run` turns it back with the gyro).
 set -euo pipefail
 
 if [[ $# -ne 1 ]]; then
@@ -25,6 +27,7 @@ ecvo=${ECVO:-$root/target/release/ecvo}
 rates=${RATES:-60 120 200}
 frames=${FRAMES:-150}
 seed=${SEED:-3}
+delay=${DEPTH_DELAY_MS:-0}
 
 if [[ ! -x $ecvo ]]; then
     (cd "$root" && cargo build --release -p ecvo-cli)
@@ -35,7 +38,7 @@ for deg in $rates; do
     dir=$out/pan_$deg
     rm -rf "$dir"
     "$ecvo" synth --out "$dir" --motion pan --max-rot-speed "$deg" --depth 2.5 \
-        --noise phone --frames "$frames" --seed "$seed" > /dev/null
+        --noise phone --frames "$frames" --seed "$seed" --depth-delay-ms "$delay" > /dev/null
     echo "$dir" >> "$out/suite.txt"
 done
 echo "rendered $(wc -l < "$out/suite.txt") pan streams into $out"
