@@ -71,7 +71,10 @@ impl Odometry {
             None => Arc::new(PreparedFrame::for_config(self.tracker.config())),
         };
         let prepared = Arc::get_mut(&mut frame).expect("a free pooled frame has one owner");
-        if let Err(e) = self.preparer.prepare_turned_into(view, depth_time, prepared) {
+        if let Err(e) = self
+            .preparer
+            .prepare_turned_into(view, depth_time, prepared)
+        {
             self.pool.push(frame);
             return Err(e);
         }

@@ -115,7 +115,10 @@ impl SequenceWriter {
     ) -> Result<()> {
         let name = format!("{timestamp:.6}");
         let depth_name = format!("{depth_timestamp:.6}");
-        if !depth_name.parse::<f64>().is_ok_and(|d| d.is_finite() && d >= 0.0) {
+        if !depth_name
+            .parse::<f64>()
+            .is_ok_and(|d| d.is_finite() && d >= 0.0)
+        {
             return Err(Error::InvalidInput(format!(
                 "{}: depth timestamp {depth_timestamp} must be finite and not negative",
                 self.dir.display()

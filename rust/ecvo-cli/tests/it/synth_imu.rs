@@ -72,8 +72,19 @@ fn depth_taken_after_the_intensity_is_turned_with_the_gyro() {
     assert!(!e.status.success());
     assert!(String::from_utf8_lossy(&e.stderr).contains("--depth-delay-ms"));
     run_ok(&[
-        "synth", "--out", s, "--frames", "40", "--seed", "3", "--motion", "pan",
-        "--max-rot-speed", "200", "--depth-delay-ms", "15",
+        "synth",
+        "--out",
+        s,
+        "--frames",
+        "40",
+        "--seed",
+        "3",
+        "--motion",
+        "pan",
+        "--max-rot-speed",
+        "200",
+        "--depth-delay-ms",
+        "15",
     ]);
     let list = |f: &str| -> Vec<f64> {
         std::fs::read_to_string(seq.join(f))
@@ -94,7 +105,10 @@ fn depth_taken_after_the_intensity_is_turned_with_the_gyro() {
         args.extend_from_slice(flags);
         run_ok(&args);
         let sm = summary(&out);
-        (sm["ate_rmse_m"].as_f64().unwrap(), sm["imu"]["depth_turned"].as_u64().unwrap())
+        (
+            sm["ate_rmse_m"].as_f64().unwrap(),
+            sm["imu"]["depth_turned"].as_u64().unwrap(),
+        )
     };
     let (turned, n) = ate(&[]);
     let (as_is, m) = ate(&["--imu-depth-time", "false"]);

@@ -310,9 +310,16 @@ fn images_pose_is_the_images_alone_under_a_rotation_prior() {
     let pulled = r.pose.rotation.angle_to(&target.rotation).to_degrees();
     let own = images.rotation.angle_to(&plain.pose.rotation).to_degrees();
     let (dt, _) = pose_error(&images, &plain.pose);
-    println!("pose {pulled:.4}° from the prior; images_pose {own:.4}°, {:.3} mm from the images' own", dt * 1e3);
+    println!(
+        "pose {pulled:.4}° from the prior; images_pose {own:.4}°, {:.3} mm from the images' own",
+        dt * 1e3
+    );
     assert!(pulled < 0.05, "the prior wins: {pulled}°");
     // Measured 0.024° and 1.4 mm: within the estimator's own stopping tolerance
     // (`min_update_px` 0.1 px is 0.02° here), against the prior's 0.1°.
-    assert!(own < 0.05 && dt < 2e-3, "images_pose {own}°, {} mm off", dt * 1e3);
+    assert!(
+        own < 0.05 && dt < 2e-3,
+        "images_pose {own}°, {} mm off",
+        dt * 1e3
+    );
 }

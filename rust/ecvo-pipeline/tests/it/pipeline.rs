@@ -469,15 +469,25 @@ fn offline_poses_with_an_imu_equal_sequential_odometry_bit_for_bit() {
         .iter()
         .enumerate()
         .map(|(i, f)| {
-            odo.push_imu(common::imu_before(&imu, &mut next, f.timestamp + 0.01, offset))
-                .unwrap();
+            odo.push_imu(common::imu_before(
+                &imu,
+                &mut next,
+                f.timestamp + 0.01,
+                offset,
+            ))
+            .unwrap();
             odo.push_with_depth_time(f.view(), depth_time(i, f.timestamp))
                 .unwrap()
         })
         .collect();
     let c = odo.tracker().counters();
     assert_eq!((c.imu.priors, c.lost_frames), (29, 0), "{:?}", c.imu);
-    assert_eq!((c.imu.depth_turned, c.imu.depth_unturned), (30, 0), "{:?}", c.imu);
+    assert_eq!(
+        (c.imu.depth_turned, c.imu.depth_unturned),
+        (30, 0),
+        "{:?}",
+        c.imu
+    );
     for threads in [1, 2] {
         let pipeline = Pipeline::new(
             config.clone(),
@@ -491,7 +501,12 @@ fn offline_poses_with_an_imu_equal_sequential_odometry_bit_for_bit() {
         let mut next = 0;
         for (i, f) in frames.iter().enumerate() {
             pipeline
-                .push_imu(common::imu_before(&imu, &mut next, f.timestamp + 0.01, offset))
+                .push_imu(common::imu_before(
+                    &imu,
+                    &mut next,
+                    f.timestamp + 0.01,
+                    offset,
+                ))
                 .unwrap();
             pipeline
                 .push_with_depth_time(f.timestamp, depth_time(i, f.timestamp), |a, b| {
