@@ -39,7 +39,7 @@
 use crate::camera::{Camera, FrameView};
 use crate::config::{BilateralConfig, Config, FilterConfig, LookupDepth, MotionLevel};
 use crate::error::Result;
-use crate::imu::depth_time::{DepthTime, turn_depth};
+use crate::imu::depth_time::DepthTime;
 
 use rayon::prelude::*;
 
@@ -51,8 +51,10 @@ mod removal;
 mod select;
 mod side;
 mod template;
+mod turn;
 pub use template::max_template_points;
 use template::{build_selected_template, build_template, template_capacity};
+pub use turn::turn_depth;
 pub(crate) mod simd;
 #[cfg(test)]
 mod tests;
@@ -383,36 +385,12 @@ impl Preparer {
         self.prepare_turned_into(view, DepthTime::Same, out)
     }
 
-    /// [`Preparer::prepare_into`] for a frame whose depth was captured at another time
-    /// than its intensity ([`crate::imu::depth_time`]): with
-    /// [`DepthTime::Turned`], the depth is first resampled to the intensity's time
-    /// ([`turn_depth`]); otherwise it is used as it is. `out.depth_time` says which.
-    pub fn prepare_turned_into(
+    /// [`Preparer::prepare_into`] for a view whose sizes were checked.
+    pub(super) fn prepare_checked(
         &mut self,
         view: FrameView<'_>,
-        depth_time: DepthTime,
         out: &mut PreparedFrame,
     ) -> Result<()> {
-        view.validate(&self.camera)?;
-        out.depth_time = depth_time;
-        if let DepthTime::Turned(r) = depth_time {
-            let mut turned = std::mem::take(&mut self.turned);
-            turn_depth(&self.camera, &r, view.depth, &mut turned);
-            let r = self.prepare_checked(
-                FrameView {
-                    depth: &turned,
-                    ..view
-                },
-                out,
-            );
-            self.turned = turned;
-            return r;
-        }
-        self.prepare_checked(view, out)
-    }
-
-    /// [`Preparer::prepare_into`] for a view whose sizes were checked.
-    fn prepare_checked(&mut self, view: FrameView<'_>, out: &mut PreparedFrame) -> Result<()> {
         out.timestamp = view.timestamp;
         if let Some(depth) = self.lookup {
             self.prepare_lookup(view, depth, out);
