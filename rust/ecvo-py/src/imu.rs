@@ -73,5 +73,7 @@ pub fn counters_dict<'py>(
     d.set_item("missing", c.missing)?;
     d.set_item("bias_updates", c.bias_updates)?;
     d.set_item("bias_outliers", c.bias_outliers)?;
+    d.set_item("depth_turned", c.depth_turned)?;
+    d.set_item("depth_unturned", c.depth_unturned)?;
     Ok(d)
 }

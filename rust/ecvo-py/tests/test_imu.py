@@ -113,3 +113,55 @@ def test_imu_prior_term_is_the_cli_flag_with_the_same_default(pan, cli, tmp_path
     seq = ecvo.read_sequence(pan, max_frames=1)
     with pytest.raises(TypeError, match="imu_prior_term must be a bool"):
         ecvo.Tracker(seq.camera, imu_prior_term=1.5)
+
+
+def test_depth_timestamp_turns_the_depth_as_ecvo_run_does(cli, tmp_path):
+    # A pan whose depth images are taken 15 ms after the intensity (stamped so in
+    # depth.txt): Tracker.push(depth_timestamp=) turns each depth to the intensity's
+    # time with the gyro, bit for bit as ecvo run does; imu_depth_time=False is the
+    # CLI's --imu-depth-time false, and leaves the depth as it is.
+    seq_dir = tmp_path / "delayed"
+    cli("synth", "--out", seq_dir, "--motion", "pan", "--max-rot-speed", "200", "--frames", "18",
+        "--seed", "4", "--depth-delay-ms", "15")
+    cam = json.loads((seq_dir / "camera.json").read_text())
+    imu = cam["imu"]
+    imu["camera_from_imu"] = [[round(x, 8) for x in row] for row in imu["camera_from_imu"]]
+    imu["time_offset"] = round(imu["time_offset"], 4)
+    imu["gyro_noise_density"] = 0.000122
+    imu["gyro_bias_random_walk"] = 0.000014
+    (seq_dir / "camera.json").write_text(json.dumps(cam))
+    run = tmp_path / "run"
+    cli("run", seq_dir, "--out", run)
+    want = np.array(read_tum(run / "trajectory.txt"))
+    assert json.loads((run / "summary.json").read_text())["imu"]["depth_turned"] == len(want)
+
+    samples = np.loadtxt(seq_dir / "imu.txt")
+    depth_stamps = np.loadtxt(seq_dir / "depth.txt", usecols=0)
+    seq = ecvo.read_sequence(seq_dir)
+    tracker = ecvo.Tracker(
+        seq.camera,
+        imu_rotation=np.array(imu["camera_from_imu"]),
+        imu_time_offset=imu["time_offset"],
+        gyro_noise_density=imu["gyro_noise_density"],
+        gyro_bias_random_walk=imu["gyro_bias_random_walk"],
+    )
+    done = 0
+    for (t, grey, depth), td in zip(seq, depth_stamps):
+        # As ecvo run feeds them: up to 5 ms after the later of the two images.
+        limit = max(t, td) + 0.005 - imu["time_offset"]
+        upto = int(np.searchsorted(samples[:, 0], limit, side="right"))
+        tracker.push_imu(samples[done:upto, 0], samples[done:upto, 1:4])
+        done = upto
+        tracker.push(t, grey, depth, depth_timestamp=td)
+    got = tracker.trajectory()
+    assert np.array_equal(got, want), np.abs(got - want).max()
+    assert tracker.counters()["imu"]["depth_turned"] == len(want)
+
+    off = ecvo.run_sequence(seq_dir, imu_depth_time=False)
+    run_off = tmp_path / "off"
+    cli("run", seq_dir, "--out", run_off, "--imu-depth-time", "false")
+    assert np.array_equal(off["trajectory"], np.array(read_tum(run_off / "trajectory.txt")))
+    assert off["counters"]["imu"]["depth_turned"] == 0
+    assert not np.array_equal(off["trajectory"], want), "the setting is applied"
+    with pytest.raises(TypeError, match="imu_depth_time must be a bool"):
+        ecvo.Tracker(seq.camera, imu_depth_time="no")

@@ -134,6 +134,8 @@ class _ImuCounters(TypedDict):
     missing: int
     bias_updates: int
     bias_outliers: int
+    depth_turned: int
+    depth_unturned: int
 
 class _Ate(TypedDict):
     """Absolute trajectory error (metres) after rigid alignment of the estimate."""
