@@ -48,12 +48,14 @@ impl Odometry {
     /// `view.timestamp`: with gyro samples covering the two times (and
     /// [`crate::Config::imu_depth_time`]), the depth is turned to the intensity's
     /// time before it is prepared ([`crate::imu::depth_time`]); counted in
-    /// `Counters::imu` either way.
+    /// `Counters::imu` either way. Fails, as [`Odometry::push`] does, on a bad frame,
+    /// and on a non-finite `depth_timestamp`.
     pub fn push_with_depth_time(
         &mut self,
         view: FrameView<'_>,
         depth_timestamp: f64,
     ) -> Result<FrameOutput> {
+        crate::imu::depth_time::check_depth_timestamp(depth_timestamp)?;
         let t = if self.tracker.config().imu_depth_time {
             self.clock.depth_time(view.timestamp, depth_timestamp)
         } else {

@@ -72,6 +72,9 @@ impl Pipeline {
                 ecvo_core::Error::BadFrame(format!("timestamp {timestamp} is not finite")).into(),
             );
         }
+        if let Some(d) = depth_timestamp {
+            ecvo_core::imu::depth_time::check_depth_timestamp(d)?;
+        }
         // A closed or failed pipeline says so before anything else.
         if s.aborted() || s.input_closed.load(Ordering::Acquire) {
             return Err(s.stopped_error());

@@ -165,3 +165,6 @@ def test_depth_timestamp_turns_the_depth_as_ecvo_run_does(cli, tmp_path):
     assert not np.array_equal(off["trajectory"], want), "the setting is applied"
     with pytest.raises(TypeError, match="imu_depth_time must be a bool"):
         ecvo.Tracker(seq.camera, imu_depth_time="no")
+    t, grey, depth = seq[0]
+    with pytest.raises(ValueError, match="depth timestamp NaN is not finite"):
+        ecvo.Tracker(seq.camera).push(t, grey, depth, depth_timestamp=float("nan"))

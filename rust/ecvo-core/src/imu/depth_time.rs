@@ -43,6 +43,18 @@ pub enum DepthTime {
     Uncovered,
 }
 
+/// Checks a frame's depth timestamp: a non-finite one is refused
+/// ([`crate::Error::BadFrame`]), never taken as the intensity's time in silence.
+pub fn check_depth_timestamp(depth_timestamp: f64) -> crate::error::Result<()> {
+    if depth_timestamp.is_finite() {
+        Ok(())
+    } else {
+        Err(crate::error::Error::BadFrame(format!(
+            "depth timestamp {depth_timestamp} is not finite"
+        )))
+    }
+}
+
 /// The raw gyro samples pushed, for the rotation between a frame's depth and
 /// intensity times.
 #[derive(Clone, Debug)]
@@ -75,6 +87,7 @@ impl DepthClock {
     /// taking a ray of the camera at the intensity's time into the camera at the
     /// depth's time, in the camera's frame.
     pub fn depth_time(&self, intensity_t: f64, depth_t: f64) -> DepthTime {
+        // Non-finite: refused by the callers ([`check_depth_timestamp`]).
         if depth_t == intensity_t || !depth_t.is_finite() {
             return DepthTime::Same;
         }

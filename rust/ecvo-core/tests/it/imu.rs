@@ -321,3 +321,43 @@ fn depth_turned_to_the_intensity_time_tracks_better() {
     // Measured 0.0053 m as is, 0.0009 m turned.
     assert!(r1 < 0.4 * r0, "position RMSE {r1} m turned, {r0} m as is");
 }
+
+/// A depth time is checked and accounted for: a non-finite one is refused with a
+/// clear error (the tracker goes on); without a gyro, or with a gap over 50 ms, the
+/// depth is left as it is, and only the latter is counted (`depth_unturned`).
+#[test]
+fn depth_times_are_checked_and_counted() {
+    let (seq, frames) = pan();
+    fn view(f: &ecvo_synth::SynthFrame) -> ecvo_core::FrameView<'_> {
+        ecvo_core::FrameView {
+            timestamp: f.timestamp,
+            intensity: &f.intensity,
+            depth: &f.depth,
+        }
+    }
+    let mut odo = ecvo_core::Odometry::new(pan_config()).unwrap();
+    let e = odo
+        .push_with_depth_time(view(&frames[0]), f64::NAN)
+        .unwrap_err();
+    assert!(e.to_string().contains("depth timestamp NaN"), "{e}");
+    assert_eq!(
+        odo.tracker().counters().frames,
+        0,
+        "the refused frame is not tracked"
+    );
+    // No gyro yet: neither turned nor counted.
+    odo.push_with_depth_time(view(&frames[0]), frames[0].timestamp + 0.01)
+        .unwrap();
+    // Samples up to just after frame 2's depth (the depth clock keeps the newest
+    // 256: pushed as they come, they cover the frames).
+    let m = ImuModel::phone(15);
+    let imu = samples(seq, &m, frames[2].timestamp + 0.07);
+    odo.push_imu(&imu).unwrap();
+    // Covered, then a gap over 50 ms.
+    odo.push_with_depth_time(view(&frames[1]), frames[1].timestamp + 0.01)
+        .unwrap();
+    odo.push_with_depth_time(view(&frames[2]), frames[2].timestamp + 0.06)
+        .unwrap();
+    let c = odo.tracker().counters().imu;
+    assert_eq!((c.depth_turned, c.depth_unturned), (1, 1), "{c:?}");
+}

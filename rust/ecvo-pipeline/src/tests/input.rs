@@ -379,3 +379,36 @@ fn the_work_of_a_frame_is_its_preparation_plus_its_tracking() {
         "{st:?}"
     );
 }
+
+/// A non-finite depth timestamp is refused with a clear error, before the frame is
+/// queued; the pipeline goes on and tracks the next frames.
+#[test]
+fn a_non_finite_depth_timestamp_is_refused_and_the_pipeline_goes_on() {
+    let (config, frames) = stream(2);
+    let p = Pipeline::new(
+        config,
+        PipelineOptions {
+            keep_trajectory: true,
+            ..PipelineOptions::default()
+        },
+    )
+    .unwrap();
+    fn fill(f: &Frame) -> impl FnOnce(&mut [u8], &mut [u16]) + '_ {
+        move |i, d| {
+            i.copy_from_slice(&f.intensity);
+            d.copy_from_slice(&f.depth);
+        }
+    }
+    for bad in [f64::NAN, f64::INFINITY] {
+        let e = p
+            .push_with_depth_time(frames[0].timestamp, bad, fill(&frames[0]))
+            .unwrap_err();
+        assert!(e.to_string().contains("depth timestamp"), "{e}");
+    }
+    for f in &frames {
+        p.push_with_depth_time(f.timestamp, f.timestamp + 0.01, fill(f))
+            .unwrap();
+    }
+    let summary = p.finish().unwrap();
+    assert_eq!((summary.stats.pushed, summary.stats.tracked), (2, 2));
+}
