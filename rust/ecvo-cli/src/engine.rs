@@ -323,7 +323,7 @@ pub fn track_sequence(
         }
         if let Some(f) = &mut imu {
             pipeline
-                .push_imu(f.before(frame.timestamp.max(frame.depth_timestamp)))
+                .push_imu(f.before_frame(&frame))
                 .context("pushing IMU samples")?;
         }
         // With the depth's own time: turned to the intensity's by the gyro, if any.

@@ -176,6 +176,13 @@ impl ImuFeed {
         }
         &self.samples[start..self.next]
     }
+
+    /// The samples to push before `frame`: [`Self::before`] the later of its intensity
+    /// and depth times, so that the gyro covers the turn of its depth to the
+    /// intensity's time.
+    pub fn before_frame(&mut self, frame: &crate::Frame) -> &[GyroSample] {
+        self.before(frame.timestamp.max(frame.depth_timestamp))
+    }
 }
 
 /// The calibration of the IMU stream `imu_txt` of the sequence in `seq_dir`: the

@@ -295,7 +295,7 @@ fn track(
         let frame = item.map_err(crate::io_err)?;
         if let Some(f) = &mut imu {
             pipeline
-                .push_imu(f.before(frame.timestamp.max(frame.depth_timestamp)))
+                .push_imu(f.before_frame(&frame))
                 .map_err(|e| err(format!("IMU samples: {e}")))?;
         }
         // As `ecvo run`: the depth's own time, turned to the intensity's by the gyro.

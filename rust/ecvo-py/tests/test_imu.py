@@ -18,17 +18,23 @@ def pan(cli, tmp_path_factory):
     return out
 
 
-def test_push_imu_tracks_as_ecvo_run_does(pan, cli, tmp_path):
-    # The calibration with short decimals: serde_json's float parsing (ecvo-io's) is
-    # not correctly rounded for long ones, Python's json is, and an ULP apart the
-    # poses would not be bit for bit the same.
-    cam = json.loads((pan / "camera.json").read_text())
+def short_calibration(seq):
+    """Rewrites seq's camera.json with the IMU calibration in short decimals and
+    returns it: serde_json's float parsing (ecvo-io's) is not correctly rounded for
+    long ones, Python's json is, and an ULP apart the poses would not be bit for bit
+    the same."""
+    cam = json.loads((seq / "camera.json").read_text())
     imu = cam["imu"]
     imu["camera_from_imu"] = [[round(x, 8) for x in row] for row in imu["camera_from_imu"]]
     imu["time_offset"] = round(imu["time_offset"], 4)
     imu["gyro_noise_density"] = 0.000122
     imu["gyro_bias_random_walk"] = 0.000014
-    (pan / "camera.json").write_text(json.dumps(cam))
+    (seq / "camera.json").write_text(json.dumps(cam))
+    return imu
+
+
+def test_push_imu_tracks_as_ecvo_run_does(pan, cli, tmp_path):
+    cal = short_calibration(pan)
     run = tmp_path / "run"
     cli("run", pan, "--out", run, "--frame-step", "3")
     want = np.array(read_tum(run / "trajectory.txt"))
@@ -36,7 +42,6 @@ def test_push_imu_tracks_as_ecvo_run_does(pan, cli, tmp_path):
     assert summary["imu"]["priors"] == len(want) - 1
 
     imu = np.loadtxt(pan / "imu.txt")
-    cal = json.loads((pan / "camera.json").read_text())["imu"]
     seq = ecvo.read_sequence(pan, frame_step=3)
     tracker = ecvo.Tracker(
         seq.camera,
@@ -123,13 +128,7 @@ def test_depth_timestamp_turns_the_depth_as_ecvo_run_does(cli, tmp_path):
     seq_dir = tmp_path / "delayed"
     cli("synth", "--out", seq_dir, "--motion", "pan", "--max-rot-speed", "200", "--frames", "18",
         "--seed", "4", "--depth-delay-ms", "15")
-    cam = json.loads((seq_dir / "camera.json").read_text())
-    imu = cam["imu"]
-    imu["camera_from_imu"] = [[round(x, 8) for x in row] for row in imu["camera_from_imu"]]
-    imu["time_offset"] = round(imu["time_offset"], 4)
-    imu["gyro_noise_density"] = 0.000122
-    imu["gyro_bias_random_walk"] = 0.000014
-    (seq_dir / "camera.json").write_text(json.dumps(cam))
+    imu = short_calibration(seq_dir)
     run = tmp_path / "run"
     cli("run", seq_dir, "--out", run)
     want = np.array(read_tum(run / "trajectory.txt"))

@@ -48,6 +48,7 @@ impl Preparer {
 /// is resized to the image (no allocation once it has the capacity).
 pub fn turn_depth(camera: &Camera, r: &UnitQuaternion<f64>, src: &[u16], dst: &mut Vec<u16>) {
     let (w, h) = (camera.width, camera.height);
+    assert_eq!(src.len(), w * h, "the depth image is the camera's size");
     dst.clear();
     dst.resize(w * h, 0);
     let m = *r.to_rotation_matrix().matrix();
@@ -128,7 +129,6 @@ fn turn_row_kernel(
             *o = nearest(src[a as usize] as f32 * s).min(i32::from(u16::MAX)) as u16;
         }
     }
-    debug_assert!(src.len() >= w * h);
 }
 
 #[cfg(test)]

@@ -385,14 +385,7 @@ fn the_work_of_a_frame_is_its_preparation_plus_its_tracking() {
 #[test]
 fn a_non_finite_depth_timestamp_is_refused_and_the_pipeline_goes_on() {
     let (config, frames) = stream(2);
-    let p = Pipeline::new(
-        config,
-        PipelineOptions {
-            keep_trajectory: true,
-            ..PipelineOptions::default()
-        },
-    )
-    .unwrap();
+    let p = Pipeline::new(config, PipelineOptions::default()).unwrap();
     fn fill(f: &Frame) -> impl FnOnce(&mut [u8], &mut [u16]) + '_ {
         move |i, d| {
             i.copy_from_slice(&f.intensity);
